@@ -1,0 +1,100 @@
+// fdem: command line front end. Exit status: 0 ok, 1 unexpected error, 2 bad input, 3 numerical
+// failure (instability, non-finite state).
+#include <cstdio>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <Kokkos_Core.hpp>
+
+#include "common/error.hpp"
+#include "fdem_version.hpp"
+#include "solver/run.hpp"
+
+namespace {
+
+void print_info() {
+  std::printf("fdem %s\n", FDEM_VERSION_STRING);
+  std::printf("Kokkos %d.%d.%d\n", KOKKOS_VERSION / 10000, (KOKKOS_VERSION / 100) % 100,
+              KOKKOS_VERSION % 100);
+  std::printf("default execution space: %s\n", Kokkos::DefaultExecutionSpace::name());
+  std::printf("concurrency: %d\n", static_cast<int>(Kokkos::DefaultExecutionSpace().concurrency()));
+  std::printf("enabled backends:");
+#ifdef KOKKOS_ENABLE_SERIAL
+  std::printf(" Serial");
+#endif
+#ifdef KOKKOS_ENABLE_OPENMP
+  std::printf(" OpenMP");
+#endif
+#ifdef KOKKOS_ENABLE_CUDA
+  std::printf(" CUDA");
+#endif
+#ifdef KOKKOS_ENABLE_HIP
+  std::printf(" HIP");
+#endif
+  std::printf("\n");
+  std::fflush(stdout);
+  Kokkos::print_configuration(std::cout, false);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);
+
+  std::string case_path, out_dir;
+  std::vector<std::string> sets;
+  bool quiet = false;
+  auto* run = app.add_subcommand("run", "run a case");
+  run->add_option("case", case_path, "case file (JSON)")->required();
+  run->add_option("--out", out_dir, "output folder (default: out/<case name>)");
+  run->add_option("--set", sets, "override a case field: key.path=value (repeatable)");
+  run->add_flag("--quiet", quiet, "no progress output");
+
+  auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");
+  check->add_option("case", case_path, "case file (JSON)")->required();
+  check->add_option("--set", sets, "override a case field: key.path=value (repeatable)");
+
+  app.add_subcommand("info", "print version, Kokkos version, backends and threads");
+
+  // Kokkos options (--kokkos-threads=N, ...) are taken out before CLI11 parses the rest.
+  std::vector<char*> kargs(argv, argv + argc), rest;
+  rest.push_back(argv[0]);
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]).rfind("--kokkos-", 0) != 0) rest.push_back(argv[i]);
+  try {
+    app.parse(static_cast<int>(rest.size()), rest.data());
+  } catch (const CLI::ParseError& e) {
+    int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+
+  Kokkos::ScopeGuard guard(argc, argv);
+  try {
+    if (app.got_subcommand("info")) {
+      print_info();
+    } else if (app.got_subcommand("check")) {
+      auto report = fdem::check_case(case_path, sets);
+      std::cout << report.dump(2) << "\n" << "case OK: " << case_path << "\n";
+    } else if (app.got_subcommand("run")) {
+      fdem::RunOptions opt;
+      opt.out_dir = out_dir;
+      opt.overrides = sets;
+      opt.progress = !quiet;
+      fdem::run_case(case_path, opt);
+    }
+  } catch (const fdem::InputError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const fdem::NumericalError& e) {
+    std::cerr << "numerical failure: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "unexpected error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

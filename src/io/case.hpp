@@ -1,0 +1,113 @@
+#pragma once
+// A case: everything a run needs, read from a JSON case file (docs/case-format.md) and validated.
+// All quantities in SI units; angles are given in degrees in the file and stored in radians.
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mesh/mesh.hpp"
+
+namespace fdem {
+
+using Vec3 = std::array<double, 3>;
+
+struct BulkMaterial {
+  std::string name;
+  double density = 0;  // kg/m^3
+  double E = 0;        // Pa
+  double nu = 0;       // -
+};
+
+struct InterfaceMaterial {
+  std::string name;
+  double kn = 0, ks = 0;    // Pa/m
+  double ft = 0, c = 0;     // Pa
+  double phi = 0;           // rad (file: phi_deg)
+  double Gnc = 0, Gsc = 0;  // N/m
+  double eta = 2.0;         // Benzeggagh-Kenane exponent
+};
+
+// Fixed or prescribed-velocity components of a node set. Fixed is velocity 0.
+struct VelocityBC {
+  std::string set;
+  std::array<bool, 3> active{false, false, false};
+  Vec3 velocity{0, 0, 0};
+  double ramp_time = 0;  // velocity rises linearly from 0 over this time (0: at once)
+};
+
+struct PointLoad {
+  std::string set;
+  Vec3 force{0, 0, 0};  // total force, shared equally by the nodes of the set
+};
+
+struct InitialVelocity {
+  std::string region;   // region name, or "all"
+  Vec3 velocity{0, 0, 0};
+};
+
+// Rigid plane (2D: line) with prescribed motion, pushing on the body's boundary nodes through
+// penalty springs with Coulomb friction and cohesion (METHOD.md section 6).
+struct PlatenSpec {
+  std::string name;
+  Vec3 point{0, 0, 0};     // a point of the plane at t = 0
+  Vec3 normal{0, 0, 0};    // unit normal pointing into the body side
+  Vec3 velocity{0, 0, 0};  // prescribed velocity of the plane
+  double kn = 0, ks = 0;   // Pa/m (per unit contact area); 0 in the file means "derive"
+  double friction = 0;     // Coulomb coefficient
+  double cohesion = 0;     // Pa
+};
+
+struct Case {
+  std::string file;     // path of the case file
+  std::string name;
+  int dim = 2;
+  MeshSpec mesh;
+  bool plane_stress = false;  // 2D only
+  double thickness = 1.0;     // 2D only, m
+
+  std::vector<BulkMaterial> materials;
+  std::map<std::string, int> region_material;   // region name -> index into materials
+  std::vector<InterfaceMaterial> interface_materials;
+  std::vector<std::string> fracturable_regions;  // region names that get interfaces
+  int fracture_material = -1;                    // index into interface_materials
+
+  std::vector<VelocityBC> velocity_bcs;
+  std::vector<PointLoad> point_loads;
+  Vec3 gravity{0, 0, 0};
+  std::vector<InitialVelocity> initial_velocities;
+  std::vector<PlatenSpec> platens;
+
+  double local_damping = 0;      // alpha, [0, 1)
+  double mass_damping = 0;       // c, 1/s
+
+  double safety_factor = 0.5;    // on the computed stable time step
+  double dt = 0;                 // > 0: user time step, used only if below the stable one
+  double end_time = 0;           // s
+  long max_steps = 0;            // 0: unlimited
+  // Stop when the named platen's force magnitude has fallen below (1 - drop_fraction) of its peak
+  // (after a peak was reached). Empty: no such stop.
+  std::string stop_platen;
+  double stop_drop_fraction = 0;
+
+  double history_interval = 0;   // s; 0: 200 rows over the run
+  double snapshot_interval = 0;  // s; 0: no snapshots
+  int check_interval = 100;      // steps between stability checks (energy balance, finiteness)
+
+  nlohmann::json resolved;       // the case after --set overrides and defaults, written to out/
+};
+
+// Reads, applies overrides ("key.path=value", value parsed as JSON when it parses, else a string)
+// and validates. Throws InputError naming the file, the key path and the allowed range.
+Case load_case(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// Same from an in-memory document; `source` names it in messages.
+Case parse_case(nlohmann::json doc, const std::string& source,
+                const std::vector<std::string>& overrides = {});
+
+// Checks that names used by the case (regions, node sets) exist in the mesh. Throws InputError.
+void check_case_against_mesh(const Case& c, const HostMesh& mesh);
+
+}  // namespace fdem

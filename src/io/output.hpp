@@ -1,0 +1,75 @@
+#pragma once
+// Results a person can look at: history.csv (one row per output interval), summary.json, and
+// snapshots as HDF5 + XDMF that ParaView opens (deformed mesh, displacement, velocity, stress,
+// interfaces with their damage).
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mesh/mesh.hpp"
+
+namespace fdem {
+
+// Creates `dir` (and parents) if needed; throws InputError if it cannot be created or written.
+void ensure_output_dir(const std::string& dir);
+
+// Writes `text` to `path` atomically (to path.tmp, then rename). Throws InputError on failure.
+void write_file_atomic(const std::string& path, const std::string& text);
+
+// history.csv: header "name [unit]" columns, one row per call; flushed each row so that a killed
+// run keeps every row written so far.
+class HistoryWriter {
+ public:
+  HistoryWriter(const std::string& path, const std::vector<std::string>& columns);
+  ~HistoryWriter();
+  HistoryWriter(const HistoryWriter&) = delete;
+  HistoryWriter& operator=(const HistoryWriter&) = delete;
+  void row(const std::vector<double>& values);
+  const std::vector<std::string>& columns() const { return columns_; }
+
+ private:
+  std::FILE* f_ = nullptr;
+  std::string path_;
+  std::vector<std::string> columns_;
+};
+
+// One snapshot's fields, on the host. Sizes: x, u, v: num_nodes*dim; stress: num_elems*6
+// (xx, yy, zz, xy, yz, xz); damage: num_ifaces (mean over the interface's points, 1 = failed).
+// Optional per-element integer field `fragment` (may be null).
+struct SnapshotFrame {
+  double time = 0;
+  long step = 0;
+  const double* x = nullptr;
+  const double* u = nullptr;
+  const double* v = nullptr;
+  const double* stress = nullptr;
+  const double* damage = nullptr;
+  const int* fragment = nullptr;
+};
+
+// DIR/snapshots.h5 holds /mesh (topology, element region, interface topology = A-side nodes) and one
+// group /step_NNNNNNNN per frame; DIR/snapshots.xdmf is a temporal collection with two grids per
+// frame ("bulk": triangles/tetrahedra, "interfaces": polylines/triangles on the current A-side
+// nodes) and is rewritten after every frame, so it is valid whenever the run stops.
+class SnapshotWriter {
+ public:
+  SnapshotWriter(const std::string& dir, const HostMesh& mesh);
+  ~SnapshotWriter();
+  SnapshotWriter(const SnapshotWriter&) = delete;
+  SnapshotWriter& operator=(const SnapshotWriter&) = delete;
+  void write(const SnapshotFrame& frame);
+  int frames() const { return static_cast<int>(times_.size()); }
+
+ private:
+  void write_xdmf() const;
+  std::string dir_;
+  int dim_, nn_, ne_, ni_;
+  long long file_ = -1;  // hid_t
+  std::vector<double> times_;
+  std::vector<long> steps_;
+  bool has_fragment_ = false;
+};
+
+}  // namespace fdem

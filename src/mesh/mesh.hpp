@@ -1,0 +1,94 @@
+#pragma once
+// Host-side mesh: what the readers and generators produce, what interface insertion transforms,
+// and what the solver uploads to the device once. Linear simplices only: triangles (dim 2) and
+// tetrahedra (dim 3).
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fdem {
+
+struct HostMesh {
+  int dim = 2;
+  std::vector<double> X;                 // num_nodes * dim reference coordinates
+  std::vector<int> elems;                // num_elems * (dim+1) node ids, positively oriented
+  std::vector<int> elem_region;          // per element: index into region_names
+  std::vector<std::string> region_names;  // physical groups of dimension `dim`
+  // Named node sets: physical groups of lower dimension (boundaries, points). After interface
+  // insertion a set holds every copy of its original nodes.
+  std::map<std::string, std::vector<int>> node_sets;
+  // Cohesive interfaces (filled by insert_interfaces). Interface i has `dim` node pairs; pair k is
+  // (ifaces[2*dim*i + k] on side A, ifaces[2*dim*i + dim + k] on side B). The A-side nodes are
+  // ordered so that the face normal from their ordering points from A towards B:
+  //   2D: n = (t_y, -t_x) with t = x_A1 - x_A0;  3D: n = (x_A1 - x_A0) x (x_A2 - x_A0).
+  std::vector<int> ifaces;
+  std::vector<int> iface_elems;          // num_ifaces * 2: (element on side A, element on side B)
+  std::vector<int> node_origin;          // per node: its id before insertion (identity before)
+
+  int nodes_per_elem() const { return dim + 1; }
+  int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }
+  int num_elems() const { return static_cast<int>(elems.size()) / (dim + 1); }
+  int num_ifaces() const { return static_cast<int>(ifaces.size()) / (2 * dim); }
+  int region_index(const std::string& name) const;  // -1 if absent
+};
+
+// What a case file's "mesh" object asks for (see docs/case-format.md).
+struct MeshSpec {
+  std::string kind;         // "file", "rectangle", "disc", "box", "sphere"
+  std::string file;         // kind == "file": path, already resolved against the case file's folder
+  double element_size = 0;  // generators (disc, sphere; rectangle/box derive nx,ny,nz if not given)
+  std::array<double, 3> origin{0, 0, 0};  // rectangle, box: lower corner; disc, sphere: centre
+  std::array<double, 3> size{0, 0, 0};    // rectangle: width, height; box: lx, ly, lz
+  double radius = 0;        // disc, sphere
+  std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
+  std::string region = "body";            // generators: name of the single region
+};
+
+// Readers and generators. All throw InputError with a message naming the file (or generator), the
+// problem and, for bad elements, the element's index and location.
+HostMesh read_gmsh(const std::string& path, int dim);  // .msh 2.2/4.1 ASCII or binary, or .geo
+// Crossed-diagonal rectangle: nx*ny cells, 4 triangles per cell around a centre node.
+// Node sets: left/right/bottom/top (= xmin/xmax/ymin/ymax), and "all".
+HostMesh generate_crossed_rectangle(double x0, double y0, double w, double h, int nx, int ny,
+                                    const std::string& region = "body");
+// Disc of radius R centred at (cx, cy), unstructured triangles of size h (Gmsh). Node sets:
+// "boundary", "all".
+HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region = "body");
+// Box of tetrahedra: nx*ny*nz hexahedral cells, each split into 6 tetrahedra (Kuhn). Node sets:
+// xmin/xmax/ymin/ymax/zmin/zmax, "all".
+HostMesh generate_box(const std::array<double, 3>& origin, const std::array<double, 3>& size,
+                      int nx, int ny, int nz, const std::string& region = "body");
+// Sphere of radius R, unstructured tetrahedra of size h (Gmsh). Node sets: "surface", "all".
+HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
+                         const std::string& region = "body");
+// Dispatch on spec.kind.
+HostMesh build_mesh(const MeshSpec& spec, int dim);
+
+// Throws InputError naming the first element whose signed area/volume is <= a tiny fraction of
+// the mean (zero or inverted), with its index, region and centroid. `source` names the file.
+void check_elements(const HostMesh& mesh, const std::string& source);
+
+// Renumber elements along a space-filling curve and nodes in order of first use, so that
+// neighbours sit near each other in memory. Call before insert_interfaces.
+void reorder_for_locality(HostMesh& mesh);
+
+// Interface insertion: every element of a fracturable region gets its own copies of its nodes,
+// and every face shared by two elements of which at least one is fracturable gets an interface.
+// Faces between two non-fracturable elements stay continuous. `fracturable[r]` is true for region r.
+void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable);
+
+// Faces on the outer boundary (belong to exactly one element and to no interface), `dim` node
+// ids each, ordered so that the normal by the convention above points out of the body.
+std::vector<int> boundary_faces(const HostMesh& mesh);
+
+struct MeshQuality {
+  double min_angle_deg = 0;    // smallest interior angle (2D) or dihedral angle (3D)
+  double max_aspect = 0;       // longest edge / shortest altitude
+  double min_size = 0;         // shortest altitude (the length that sets the time step)
+  double mean_size = 0;        // mean edge length
+  double min_measure = 0;      // smallest area/volume
+};
+MeshQuality mesh_quality(const HostMesh& mesh);
+
+}  // namespace fdem
