@@ -1,12 +1,300 @@
 #include "solver/run.hpp"
 
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
 #include "common/error.hpp"
+#include "io/case.hpp"
+#include "io/output.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/simulation.hpp"
 
 namespace fdem {
-nlohmann::json run_case(const std::string&, const RunOptions&) {
-  throw InputError("fdem run: the solver is not built yet");
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Mesh of a case, ready for the solver: built or read, checked, renumbered, interfaces inserted.
+HostMesh prepare_mesh(const Case& c) {
+  HostMesh mesh = build_mesh(c.mesh, c.dim);
+  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
+  check_elements(mesh, source);
+  check_case_against_mesh(c, mesh);
+  reorder_for_locality(mesh);
+  if (!c.fracturable_regions.empty()) {
+    std::vector<bool> frac(mesh.region_names.size(), false);
+    for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
+    insert_interfaces(mesh, frac);
+  }
+  return mesh;
 }
-nlohmann::json check_case(const std::string&, const std::vector<std::string>&) {
-  throw InputError("fdem check: not built yet");
+
+std::string fmt_time(double s) {
+  char buf[64];
+  if (!std::isfinite(s)) return "?";
+  if (s < 120) std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 7200) std::snprintf(buf, sizeof buf, "%.1f min", s / 60);
+  else std::snprintf(buf, sizeof buf, "%.1f h", s / 3600);
+  return buf;
 }
+
+// Progress: a line rewritten in place on a terminal; on a log, a line every 10 % or 60 s.
+class Progress {
+ public:
+  explicit Progress(bool on) : on_(on), tty_(isatty(fileno(stderr))), start_(Clock::now()) {}
+  void update(long step, double t, double end_time, bool force = false) {
+    if (!on_) return;
+    const auto now = Clock::now();
+    const double wall = std::chrono::duration<double>(now - start_).count();
+    const double since = std::chrono::duration<double>(now - last_).count();
+    const double frac = end_time > 0 ? t / end_time : 0;
+    const int decile = static_cast<int>(frac * 10);
+    const bool due = tty_ ? since > 0.5 : (since > 60 || decile > last_decile_);
+    if (!due && !force) return;
+    last_ = now;
+    last_decile_ = decile;
+    const double rate = wall > 0 ? step / wall : 0;
+    const double eta = frac > 0 ? wall * (1 - frac) / frac : NAN;
+    std::fprintf(stderr, "%sstep %ld  t = %.4e s (%5.1f %%)  %.3g steps/s  elapsed %s  left %s%s",
+                 tty_ ? "\r" : "", step, t, 100 * frac, rate, fmt_time(wall).c_str(),
+                 fmt_time(eta).c_str(), tty_ ? "   " : "\n");
+    std::fflush(stderr);
+  }
+  void done() {
+    if (on_ && tty_) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool on_, tty_;
+  Clock::time_point start_, last_{};
+  int last_decile_ = -1;
+};
+
+nlohmann::json mesh_report(const HostMesh& mesh) {
+  const auto q = mesh_quality(mesh);
+  return {{"nodes", mesh.num_nodes()},
+          {"elements", mesh.num_elems()},
+          {"interfaces", mesh.num_ifaces()},
+          {"regions", mesh.region_names},
+          {"quality",
+           {{"min_angle_deg", q.min_angle_deg},
+            {"max_aspect", q.max_aspect},
+            {"min_altitude_m", q.min_size},
+            {"mean_edge_m", q.mean_size}}}};
+}
+
+template <int D>
+nlohmann::json stable_report(const Simulation<D>& sim) {
+  return {{"dt_s", sim.dt},
+          {"dt_critical_s", sim.stable.critical},
+          {"dt_bulk_s", sim.stable.bulk},
+          {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
+}
+
+template <int D>
+nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out,
+                       const RunOptions& opt) {
+  const auto wall0 = Clock::now();
+  Simulation<D> sim(c, mesh);
+  const int np = sim.m.platens.count;
+  const char* axes[3] = {"x", "y", "z"};
+
+  std::vector<std::string> cols = {"time [s]", "step"};
+  for (const auto& name : sim.platen_names()) {
+    cols.push_back(name + "_displacement [m]");
+    for (int k = 0; k < D; ++k) cols.push_back(name + "_force_" + axes[k] + " [N]");
+    cols.push_back(name + "_load [N]");
+  }
+  for (const auto& name : sim.bc_names())
+    for (int k = 0; k < D; ++k) cols.push_back(name + "_reaction_" + axes[k] + " [N]");
+  for (const char* e : {"E_kinetic [J]", "E_strain [J]", "E_interface [J]", "E_contact [J]",
+                        "D_fracture [J]", "D_damping [J]", "D_friction [J]", "W_external [J]",
+                        "energy_error [J]", "interfaces_damaged", "interfaces_failed"})
+    cols.push_back(e);
+  HistoryWriter history(out + "/history.csv", cols);
+
+  std::unique_ptr<SnapshotWriter> snaps;
+  if (c.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(out, mesh);
+  std::vector<double> sx, su, sv, ss, sd;
+  auto snapshot = [&]() {
+    if (!snaps) return;
+    sim.download(sx, su, sv, ss, sd);
+    SnapshotFrame fr;
+    fr.time = sim.t;
+    fr.step = sim.step_count;
+    fr.x = sx.data();
+    fr.u = su.data();
+    fr.v = sv.data();
+    fr.stress = ss.data();
+    fr.damage = sd.data();
+    snaps->write(fr);
+  };
+
+  const double hist_dt = c.history_interval > 0 ? c.history_interval : c.end_time / 200;
+  double next_hist = 0, next_snap = 0;
+  std::vector<double> peak(np, 0.0), peak_disp(np, 0.0);
+  double max_rel_error = 0;
+  Energies last{};
+  std::string stop_reason = "end_time";
+  int stop_platen = -1;
+  for (int p = 0; p < np; ++p)
+    if (sim.platen_names()[p] == c.stop_platen) stop_platen = p;
+
+  auto write_row = [&]() -> bool {  // returns true when the stop condition is met
+    last = sim.energies();
+    std::vector<double> row = {sim.t, static_cast<double>(sim.step_count)};
+    bool stop = false;
+    for (int p = 0; p < np; ++p) {
+      const auto F = sim.platen_force(p);
+      const auto& P = sim.m.platens.p[p];
+      const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
+      const double disp = sim.platen_displacement(p);
+      row.push_back(disp);
+      for (int k = 0; k < D; ++k) row.push_back(F[k]);
+      row.push_back(load);
+      if (load > peak[p]) {
+        peak[p] = load;
+        peak_disp[p] = disp;
+      }
+      if (p == stop_platen && peak[p] > 0 && load < (1 - c.stop_drop_fraction) * peak[p]) stop = true;
+    }
+    for (const auto& r : sim.reactions())
+      for (int k = 0; k < D; ++k) row.push_back(r[k]);
+    for (double e : {last.kinetic, last.strain, last.interface_elastic, last.contact_elastic,
+                     last.fracture, last.damping, last.friction, last.work_external,
+                     last.balance_error, static_cast<double>(last.damaged),
+                     static_cast<double>(last.failed)})
+      row.push_back(e);
+    history.row(row);
+    if (last.scale > 0) max_rel_error = std::max(max_rel_error, std::fabs(last.balance_error) / last.scale);
+    return stop;
+  };
+
+  auto check = [&]() { sim.check_stability(); };
+
+  Progress progress(opt.progress);
+  if (opt.progress) {
+    std::fprintf(stderr, "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); %.0f steps to end_time\n",
+                 c.name.c_str(), sim.m.nn, sim.m.ne, sim.m.ni, sim.dt, sim.dt / sim.stable.critical,
+                 sim.stable.critical, std::ceil(c.end_time / sim.dt));
+  }
+  write_row();
+  next_hist = hist_dt;
+  snapshot();
+  next_snap = c.snapshot_interval;
+  const auto loop0 = Clock::now();
+  while (sim.t < c.end_time * (1 - 1e-12)) {
+    if (c.max_steps > 0 && sim.step_count >= c.max_steps) {
+      stop_reason = "max_steps";
+      break;
+    }
+    const bool hist = sim.t + sim.dt >= next_hist * (1 - 1e-12);
+    sim.set_sample_reactions(hist);
+    sim.step();
+    if (c.check_interval > 0 && sim.step_count % c.check_interval == 0) check();
+    if (hist) {
+      next_hist += hist_dt;
+      if (write_row()) {
+        stop_reason = "load_drop";
+        break;
+      }
+    }
+    if (snaps && sim.t >= next_snap * (1 - 1e-12)) {
+      snapshot();
+      next_snap += c.snapshot_interval;
+    }
+    progress.update(sim.step_count, sim.t, c.end_time);
+  }
+  const double loop_wall = std::chrono::duration<double>(Clock::now() - loop0).count();
+  progress.update(sim.step_count, sim.t, c.end_time, true);
+  progress.done();
+  check();
+  write_row();
+  if (snaps && (snaps->frames() == 0 || sim.t > next_snap - c.snapshot_interval)) snapshot();
+
+  nlohmann::json summary;
+  summary["case"] = c.name;
+  summary["dimension"] = D;
+  summary["counts"] = mesh_report(mesh);
+  summary["counts"]["boundary_nodes"] = sim.m.nb;
+  summary["time_step"] = stable_report(sim);
+  summary["steps"] = sim.step_count;
+  summary["end_time_s"] = sim.t;
+  summary["stop_reason"] = stop_reason;
+  summary["wall_seconds"] = std::chrono::duration<double>(Clock::now() - wall0).count();
+  summary["loop_wall_seconds"] = loop_wall;
+  summary["element_steps_per_second"] = loop_wall > 0 ? sim.step_count * double(sim.m.ne) / loop_wall : 0;
+  summary["energy"] = {{"kinetic_J", last.kinetic},
+                       {"strain_J", last.strain},
+                       {"interface_elastic_J", last.interface_elastic},
+                       {"contact_elastic_J", last.contact_elastic},
+                       {"fracture_J", last.fracture},
+                       {"damping_J", last.damping},
+                       {"friction_J", last.friction},
+                       {"external_work_J", last.work_external},
+                       {"balance_error_J", last.balance_error},
+                       {"max_relative_balance_error", max_rel_error}};
+  summary["interfaces_damaged"] = last.damaged;
+  summary["interfaces_failed"] = last.failed;
+  nlohmann::json results = nlohmann::json::object();
+  for (int p = 0; p < np; ++p) {
+    results["platens"][sim.platen_names()[p]] = {{"peak_load_N", peak[p]},
+                                                 {"displacement_at_peak_m", peak_disp[p]}};
+  }
+  if (np > 0) {
+    results["peak_load_N"] = peak[0];
+    if (D == 2 && c.mesh.kind == "disc") {
+      // Brazilian test: sigma_t = 2 P / (pi D L)
+      results["tensile_strength_Pa"] = 2 * peak[0] / (M_PI * 2 * c.mesh.radius * c.thickness);
+    }
+  }
+  summary["results"] = results;
+  summary["outputs"] = {{"history", out + "/history.csv"},
+                        {"summary", out + "/summary.json"},
+                        {"case", out + "/case.json"}};
+  if (snaps) summary["outputs"]["snapshots"] = out + "/snapshots.xdmf";
+  write_file_atomic(out + "/summary.json", summary.dump(2) + "\n");
+  if (opt.progress) {
+    std::fprintf(stderr, "fdem: %ld steps in %.1f s (%.3g element-steps/s); stopped by %s\n",
+                 sim.step_count, loop_wall, summary["element_steps_per_second"].get<double>(),
+                 stop_reason.c_str());
+  }
+  std::printf("results: %s\n", out.c_str());
+  std::printf("  history:   %s/history.csv\n  summary:   %s/summary.json\n", out.c_str(), out.c_str());
+  if (snaps) std::printf("  snapshots: %s/snapshots.xdmf (open in ParaView)\n", out.c_str());
+  std::fflush(stdout);
+  return summary;
+}
+
+}  // namespace
+
+nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
+  const Case c = load_case(case_path, opt.overrides);
+  const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
+  ensure_output_dir(out);
+  write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  const HostMesh mesh = prepare_mesh(c);
+  return c.dim == 2 ? run_dim<2>(c, mesh, out, opt) : run_dim<3>(c, mesh, out, opt);
+}
+
+nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides) {
+  const Case c = load_case(case_path, overrides);
+  const HostMesh mesh = prepare_mesh(c);
+  nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
+  auto add_dt = [&](const auto& sim) {
+    report["time_step"] = stable_report(sim);
+    report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);
+  };
+  if (c.dim == 2) add_dt(Simulation<2>(c, mesh));
+  else add_dt(Simulation<3>(c, mesh));
+  return report;
+}
+
 }  // namespace fdem

@@ -1,0 +1,55 @@
+#pragma once
+// One source for Kokkos 3.4.1 (Debian) and current Kokkos (4.x/5.x), OpenMP and CUDA.
+// See ../shared/guides/kokkos-portability.md for the differences bridged here.
+#include <Kokkos_Core.hpp>
+#include <Kokkos_ScatterView.hpp>
+
+namespace fdem {
+
+#if KOKKOS_VERSION >= 30700
+namespace kmath = Kokkos;
+#else
+namespace kmath = Kokkos::Experimental;
+#endif
+
+using ExecSpace = Kokkos::DefaultExecutionSpace;
+using MemSpace = ExecSpace::memory_space;
+
+template <class T>
+KOKKOS_INLINE_FUNCTION T kmin(T a, T b) { return a < b ? a : b; }
+template <class T>
+KOKKOS_INLINE_FUNCTION T kmax(T a, T b) { return a > b ? a : b; }
+template <class T>
+KOKKOS_INLINE_FUNCTION T kclamp(T x, T lo, T hi) { return x < lo ? lo : (x > hi ? hi : x); }
+
+// A fixed number of sums reduced together (energies, counts). Works as a parallel_reduce result
+// type in Kokkos 3.4.1 (volatile join) and 4.x (plain join).
+template <int N>
+struct SumN {
+  double v[N];
+  KOKKOS_INLINE_FUNCTION SumN() {
+    for (int i = 0; i < N; ++i) v[i] = 0.0;
+  }
+  KOKKOS_INLINE_FUNCTION SumN& operator+=(const SumN& o) {
+    for (int i = 0; i < N; ++i) v[i] += o.v[i];
+    return *this;
+  }
+#if KOKKOS_VERSION < 40000
+  KOKKOS_INLINE_FUNCTION void operator+=(const volatile SumN& o) volatile {
+    for (int i = 0; i < N; ++i) v[i] += o.v[i];
+  }
+#endif
+};
+
+// Scatter of nodal forces: ScatterView duplicates per thread on host backends and uses atomics
+// on GPUs (Kokkos' per-backend defaults); `access()` is taken once per chunk of kScatterChunk items.
+constexpr int kScatterChunk = 256;
+
+}  // namespace fdem
+
+namespace Kokkos {
+template <int N>
+struct reduction_identity<fdem::SumN<N>> {
+  KOKKOS_FORCEINLINE_FUNCTION static fdem::SumN<N> sum() { return fdem::SumN<N>(); }
+};
+}  // namespace Kokkos

@@ -1,0 +1,69 @@
+#pragma once
+// Device data of a run: nodes, elements and interfaces as structures of arrays in Kokkos Views,
+// specialised on the dimension D (2: triangles and 4-node interfaces; 3: tetrahedra and 6-node
+// interfaces) so that a 2D run does no 3D work. Built once on the host (src/solver/build_model.cpp);
+// during a run nothing moves between host and device except output.
+#include "cohesive.hpp"
+#include "fdem_kokkos.hpp"
+
+namespace fdem {
+
+// A velocity boundary condition as the kernels see it: components in `mask` (bit k = component k)
+// move at vel * min(1, t / ramp).
+struct BCDev {
+  int mask;
+  double vel[3];
+  double ramp;
+};
+
+// Rigid platen: plane through p0 + vel * t with unit normal n pointing into the body.
+struct PlatenDev {
+  double p0[3], n[3], vel[3];
+  double kn, ks;        // Pa/m, times the node's contact area
+  double mu, coh;       // friction coefficient, cohesion (Pa)
+};
+constexpr int kMaxPlatens = 8;
+struct PlatenSet {
+  int count = 0;
+  PlatenDev p[kMaxPlatens];
+};
+// Per-platen accumulators (device): force on the body this step (0..2), cumulative work done by
+// the platen (3), cumulative friction dissipation (4), contacts this step (5).
+constexpr int kPlatenAcc = 8;
+
+template <int D>
+struct Model {
+  static constexpr int dim = D;
+  int nn = 0, ne = 0, ni = 0, nb = 0;
+  double thickness = 1.0;  // 2D: out-of-plane thickness; 3D: 1
+  bool plane_stress = false;
+
+  // nodes
+  Kokkos::View<double* [D]> X, x, v, f;  // reference, current position, velocity, force
+  Kokkos::View<double*> mass;
+  Kokkos::View<int*> node_bc;      // -1: free; else index into bcs
+  Kokkos::View<BCDev*> bcs;
+  Kokkos::View<double* [D]> fext;  // constant point loads (extent 0 when there are none)
+
+  // elements
+  Kokkos::View<int* [D + 1]> elem;
+  Kokkos::View<double* [D][D]> grad;  // reference shape-function gradients of nodes 1..D
+  Kokkos::View<double*> vol0;         // reference volume (2D: area * thickness)
+  Kokkos::View<int*> emat;            // material index
+  Kokkos::View<double* [3]> mat;      // per material: lambda (plane-stress corrected), mu, density
+
+  // interfaces: node pairs (A0..A{D-1}, B0..B{D-1}); per integration point (one per node pair)
+  // the history dmax, dm0, dmf, gc.
+  Kokkos::View<int* [2 * D]> iface;
+  Kokkos::View<double* [D][4]> ihist;
+  CohesiveParams coh{};
+
+  // outer boundary: nodes that can touch platens, with their contact (tributary) areas
+  Kokkos::View<int*> bnode;
+  Kokkos::View<double*> barea;
+  PlatenSet platens;
+  Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, boundary node)
+  Kokkos::View<double* [kPlatenAcc]> platen_acc;
+};
+
+}  // namespace fdem

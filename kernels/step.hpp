@@ -1,0 +1,424 @@
+#pragma once
+// The kernels of one explicit step, and the reductions done on output/check steps only.
+// Free functions that copy the Views they need into locals before each KOKKOS_LAMBDA, so that the
+// same source compiles for OpenMP and CUDA (no virtual calls, no std containers, no exceptions).
+#include "cohesive.hpp"
+#include "elastic.hpp"
+#include "model.hpp"
+
+namespace fdem {
+
+template <int D>
+using ForceScatter = Kokkos::Experimental::ScatterView<double* [D]>;
+
+// Chunk of items per work item for the scatter: 256 on host backends (one access() per chunk),
+// 1 on GPUs (one thread per item, atomics).
+constexpr int kChunk =
+    Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? kScatterChunk : 1;
+
+// Geometry of an interface: unit normal n (from side A to side B) of the mid-surface and the
+// tributary area of each integration point (nodal integration: one point per node pair).
+template <int D>
+KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
+                                            double thickness, double (&n)[D], double& area_pt) {
+  double m[D][D];
+  for (int k = 0; k < D; ++k)
+    for (int i = 0; i < D; ++i) m[k][i] = 0.5 * (xa[k][i] + xb[k][i]);
+  if constexpr (D == 2) {
+    const double tx = m[1][0] - m[0][0], ty = m[1][1] - m[0][1];
+    const double L = kmath::sqrt(tx * tx + ty * ty);
+    n[0] = ty / L;
+    n[1] = -tx / L;
+    area_pt = 0.5 * L * thickness;
+  } else {
+    const double a[3] = {m[1][0] - m[0][0], m[1][1] - m[0][1], m[1][2] - m[0][2]};
+    const double b[3] = {m[2][0] - m[0][0], m[2][1] - m[0][1], m[2][2] - m[0][2]};
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double len = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int i = 0; i < D; ++i) n[i] = c[i] / len;
+    area_pt = 0.5 * len / 3.0;
+  }
+}
+
+// Cohesive forces of one interface: updates the history of its points and returns the force on
+// each A-side node (the B-side node gets the opposite). Also the mean damage.
+template <int D>
+KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
+                                               double thickness, const CohesiveParams& p,
+                                               CohesivePoint (&h)[D], double (&fa)[D][D]) {
+  double n[D], ap;
+  interface_frame<D>(xa, xb, thickness, n, ap);
+  double dsum = 0;
+  for (int k = 0; k < D; ++k) {
+    double d[D], dn = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+    }
+    double ds2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] -= dn * n[i];
+      ds2 += d[i] * d[i];
+    }
+    double tn, kss, dmg;
+    cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
+    dsum += dmg;
+    for (int i = 0; i < D; ++i) fa[k][i] = ap * (tn * n[i] + kss * d[i]);
+  }
+  return dsum / D;
+}
+
+// Internal forces of bulk elements and interfaces, fused in one kernel and scattered into m.f
+// (which the node update left at zero).
+template <int D>
+void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
+  const int ne = m.ne, ni = m.ni;
+  const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
+  auto x = m.x;
+  auto elem = m.elem;
+  auto grad = m.grad;
+  auto vol0 = m.vol0;
+  auto emat = m.emat;
+  auto mat = m.mat;
+  auto iface = m.iface;
+  auto ihist = m.ihist;
+  const auto coh = m.coh;
+  const double th = m.thickness;
+  sf.reset();
+  Kokkos::parallel_for(
+      "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc + nic), KOKKOS_LAMBDA(const int c) {
+        auto acc = sf.access();
+        if (c < nbc) {
+          const int e1 = kmin((c + 1) * kChunk, ne);
+          for (int e = c * kChunk; e < e1; ++e) {
+            double xe[D + 1][D], G[D][D], fe[D + 1][D];
+            for (int a = 0; a < D + 1; ++a)
+              for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
+            for (int b = 0; b < D; ++b)
+              for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+            const int mt = emat(e);
+            element_forces<D>(xe, G, vol0(e), mat(mt, 0), mat(mt, 1), fe);
+            for (int a = 0; a < D + 1; ++a)
+              for (int i = 0; i < D; ++i) acc(elem(e, a), i) += fe[a][i];
+          }
+        } else {
+          const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
+          for (int q = i0; q < i1; ++q) {
+            double xa[D][D], xb[D][D], fa[D][D];
+            CohesivePoint h[D];
+            for (int k = 0; k < D; ++k) {
+              for (int i = 0; i < D; ++i) {
+                xa[k][i] = x(iface(q, k), i);
+                xb[k][i] = x(iface(q, D + k), i);
+              }
+              h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+            }
+            interface_forces<D>(xa, xb, th, coh, h, fa);
+            for (int k = 0; k < D; ++k) {
+              ihist(q, k, 0) = h[k].dmax;
+              ihist(q, k, 1) = h[k].dm0;
+              ihist(q, k, 2) = h[k].dmf;
+              ihist(q, k, 3) = h[k].gc;
+              for (int i = 0; i < D; ++i) {
+                acc(iface(q, k), i) += fa[k][i];
+                acc(iface(q, D + k), i) -= fa[k][i];
+              }
+            }
+          }
+        }
+      });
+  auto f = m.f;
+  Kokkos::Experimental::contribute(f, sf);
+}
+
+// Rigid platens acting on the boundary nodes: normal penalty (no tension) and incremental shear
+// spring with Coulomb friction and cohesion. Adds to m.f (after the scatter, one writer per
+// node), accumulates platen forces, work and friction dissipation. t: time of positions x.
+template <int D>
+void apply_platens(const Model<D>& m, double t, double dt) {
+  if (m.platens.count == 0 || m.nb == 0) return;
+  const auto ps = m.platens;
+  auto acc = m.platen_acc;
+  Kokkos::parallel_for(
+      "fdem::platens::reset", Kokkos::RangePolicy<ExecSpace>(0, ps.count), KOKKOS_LAMBDA(const int p) {
+        acc(p, 0) = 0; acc(p, 1) = 0; acc(p, 2) = 0; acc(p, 5) = 0;
+      });
+  auto x = m.x;
+  auto v = m.v;
+  auto f = m.f;
+  auto bnode = m.bnode;
+  auto barea = m.barea;
+  auto fs = m.platen_fs;
+  Kokkos::parallel_for(
+      "fdem::platens", Kokkos::RangePolicy<ExecSpace>(0, m.nb), KOKKOS_LAMBDA(const int b) {
+        const int i = bnode(b);
+        const double A = barea(b);
+        for (int p = 0; p < ps.count; ++p) {
+          const PlatenDev& P = ps.p[p];
+          double g = 0;
+          for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
+          if (g >= 0.0) {
+            for (int k = 0; k < D; ++k) fs(p, b, k) = 0.0;
+            continue;
+          }
+          const double Fn = -P.kn * A * g;
+          // relative tangential displacement increment over the last step
+          double du[D], dun = 0;
+          for (int k = 0; k < D; ++k) {
+            du[k] = (v(i, k) - P.vel[k]) * dt;
+            dun += du[k] * P.n[k];
+          }
+          double Fs[D], fsn = 0, Fs2 = 0;
+          for (int k = 0; k < D; ++k) fsn += fs(p, b, k) * P.n[k];
+          for (int k = 0; k < D; ++k) {
+            Fs[k] = fs(p, b, k) - fsn * P.n[k] - P.ks * A * (du[k] - dun * P.n[k]);
+            Fs2 += Fs[k] * Fs[k];
+          }
+          const double lim = P.mu * Fn + P.coh * A;
+          const double Fsm = kmath::sqrt(Fs2);
+          if (Fsm > lim) {
+            const double r = Fsm > 0 ? lim / Fsm : 0.0;
+            for (int k = 0; k < D; ++k) Fs[k] *= r;
+            Kokkos::atomic_add(&acc(p, 4), lim * (Fsm - lim) / (P.ks * A));
+          }
+          double work = 0;
+          for (int k = 0; k < D; ++k) {
+            const double Fk = Fn * P.n[k] + Fs[k];
+            fs(p, b, k) = Fs[k];
+            f(i, k) += Fk;
+            Kokkos::atomic_add(&acc(p, k), Fk);
+            work += Fk * P.vel[k] * dt;
+          }
+          Kokkos::atomic_add(&acc(p, 3), work);
+          Kokkos::atomic_add(&acc(p, 5), 1.0);
+        }
+      });
+}
+
+struct NodeUpdateParams {
+  double gravity[3];
+  double alpha;      // local non-viscous damping
+  double cmass;      // mass-proportional damping (1/s)
+  double t, dt;      // time of the current positions, step
+  bool has_fext;
+};
+
+// Central-difference update of all nodes with damping and velocity BCs; zeroes the force for the
+// next step. Returns (energy dissipated by damping, work of the velocity BCs) over this step.
+template <int D>
+SumN<2> update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
+  auto x = m.x;
+  auto v = m.v;
+  auto f = m.f;
+  auto mass = m.mass;
+  auto node_bc = m.node_bc;
+  auto bcs = m.bcs;
+  auto fext = m.fext;
+  const NodeUpdateParams p = prm;
+  const double th = p.t + 0.5 * p.dt;  // velocities live at half steps
+  SumN<2> out;
+  Kokkos::parallel_reduce(
+      "fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+      KOKKOS_LAMBDA(const int i, SumN<2>& s) {
+        const double mi = mass(i);
+        const int bc = node_bc(i);
+        for (int k = 0; k < D; ++k) {
+          double F = f(i, k) + mi * p.gravity[k];
+          if (p.has_fext) F += fext(i, k);
+          const double vo = v(i, k);
+          double vn;
+          if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
+            const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
+            vn = bcs(bc).vel[k] * r;
+            s.v[1] += (mi * (vn - vo) / p.dt - F) * vn * p.dt;
+          } else {
+            double fd = -p.cmass * mi * vo;
+            if (p.alpha > 0) {
+              const double fu = F + fd;
+              fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
+            }
+            vn = vo + p.dt * (F + fd) / mi;
+            s.v[0] -= fd * 0.5 * (vo + vn) * p.dt;
+          }
+          v(i, k) = vn;
+          x(i, k) += p.dt * vn;
+          f(i, k) = 0.0;
+        }
+      },
+      out);
+  return out;
+}
+
+// ---- reductions for output and checks (not every step) ----
+
+// Bulk strain energy.
+template <int D>
+double strain_energy(const Model<D>& m) {
+  auto x = m.x;
+  auto elem = m.elem;
+  auto grad = m.grad;
+  auto vol0 = m.vol0;
+  auto emat = m.emat;
+  auto mat = m.mat;
+  double w = 0;
+  Kokkos::parallel_reduce(
+      "fdem::strain_energy", Kokkos::RangePolicy<ExecSpace>(0, m.ne),
+      KOKKOS_LAMBDA(const int e, double& s) {
+        double xe[D + 1][D], G[D][D], F[D][D], S[D][D];
+        for (int a = 0; a < D + 1; ++a)
+          for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
+        for (int b = 0; b < D; ++b)
+          for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+        deformation_gradient<D>(xe, G, F);
+        const int mt = emat(e);
+        s += vol0(e) * svk_stress<D>(F, mat(mt, 0), mat(mt, 1), S);
+      },
+      w);
+  return w;
+}
+
+// Interfaces: (stored elastic energy, dissipated fracture energy, damaged count, failed count).
+template <int D>
+SumN<4> interface_state(const Model<D>& m) {
+  auto x = m.x;
+  auto iface = m.iface;
+  auto ihist = m.ihist;
+  const auto coh = m.coh;
+  const double th = m.thickness;
+  SumN<4> out;
+  Kokkos::parallel_reduce(
+      "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
+      KOKKOS_LAMBDA(const int q, SumN<4>& s) {
+        double xa[D][D], xb[D][D], n[D], ap;
+        for (int k = 0; k < D; ++k)
+          for (int i = 0; i < D; ++i) {
+            xa[k][i] = x(iface(q, k), i);
+            xb[k][i] = x(iface(q, D + k), i);
+          }
+        interface_frame<D>(xa, xb, th, n, ap);
+        bool any = false, all = true;
+        for (int k = 0; k < D; ++k) {
+          const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+          double d[D], dn = 0, ds2 = 0;
+          for (int i = 0; i < D; ++i) {
+            d[i] = xb[k][i] - xa[k][i];
+            dn += d[i] * n[i];
+          }
+          for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
+          const double dmg = cohesive_damage(h);
+          s.v[0] += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
+          s.v[1] += ap * cohesive_dissipation(h);
+          any = any || dmg > 0.0;
+          all = all && dmg >= 1.0;
+        }
+        s.v[2] += any ? 1.0 : 0.0;
+        s.v[3] += all ? 1.0 : 0.0;
+      },
+      out);
+  return out;
+}
+
+// Nodes: (kinetic energy, work of gravity, work of point loads, max |v|).
+template <int D>
+SumN<3> node_energy(const Model<D>& m, const double (&gravity)[3]) {
+  auto x = m.x;
+  auto X = m.X;
+  auto v = m.v;
+  auto mass = m.mass;
+  auto fext = m.fext;
+  const bool has_fext = m.fext.extent(0) > 0;
+  const double g[3] = {gravity[0], gravity[1], gravity[2]};
+  SumN<3> out;
+  Kokkos::parallel_reduce(
+      "fdem::node_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+      KOKKOS_LAMBDA(const int i, SumN<3>& s) {
+        for (int k = 0; k < D; ++k) {
+          const double u = x(i, k) - X(i, k);
+          s.v[0] += 0.5 * mass(i) * v(i, k) * v(i, k);
+          s.v[1] += mass(i) * g[k] * u;
+          if (has_fext) s.v[2] += fext(i, k) * u;
+        }
+      },
+      out);
+  return out;
+}
+
+// Elastic energy stored in the platen springs (normal and shear).
+template <int D>
+double platen_energy(const Model<D>& m, double t) {
+  if (m.platens.count == 0 || m.nb == 0) return 0.0;
+  const auto ps = m.platens;
+  auto x = m.x;
+  auto bnode = m.bnode;
+  auto barea = m.barea;
+  auto fs = m.platen_fs;
+  double e = 0;
+  Kokkos::parallel_reduce(
+      "fdem::platen_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nb),
+      KOKKOS_LAMBDA(const int b, double& s) {
+        const int i = bnode(b);
+        const double A = barea(b);
+        for (int p = 0; p < ps.count; ++p) {
+          const PlatenDev& P = ps.p[p];
+          double g = 0, f2 = 0;
+          for (int k = 0; k < D; ++k) {
+            g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
+            f2 += fs(p, b, k) * fs(p, b, k);
+          }
+          if (g < 0) s += 0.5 * P.kn * A * g * g + 0.5 * f2 / (P.ks * A);
+        }
+      },
+      e);
+  return e;
+}
+
+// Sum of the internal force over a node list (reaction of a velocity BC = minus this sum).
+template <int D>
+void node_list_force(const Model<D>& m, const Kokkos::View<int*>& nodes, double (&out)[3]) {
+  auto f = m.f;
+  SumN<3> s;
+  Kokkos::parallel_reduce(
+      "fdem::node_list_force", Kokkos::RangePolicy<ExecSpace>(0, nodes.extent(0)),
+      KOKKOS_LAMBDA(const int j, SumN<3>& a) {
+        for (int k = 0; k < D; ++k) a.v[k] += f(nodes(j), k);
+      },
+      s);
+  for (int k = 0; k < 3; ++k) out[k] = s.v[k];
+}
+
+// Per-element Cauchy stress (6 components) and per-interface mean damage, for snapshots.
+template <int D>
+void element_stress(const Model<D>& m, const Kokkos::View<double* [6]>& out) {
+  auto x = m.x;
+  auto elem = m.elem;
+  auto grad = m.grad;
+  auto emat = m.emat;
+  auto mat = m.mat;
+  const bool ps = m.plane_stress;
+  Kokkos::parallel_for(
+      "fdem::element_stress", Kokkos::RangePolicy<ExecSpace>(0, m.ne), KOKKOS_LAMBDA(const int e) {
+        double xe[D + 1][D], G[D][D], F[D][D], s6[6];
+        for (int a = 0; a < D + 1; ++a)
+          for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
+        for (int b = 0; b < D; ++b)
+          for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+        deformation_gradient<D>(xe, G, F);
+        const int mt = emat(e);
+        cauchy_stress<D>(F, mat(mt, 0), mat(mt, 1), ps, s6);
+        for (int c = 0; c < 6; ++c) out(e, c) = s6[c];
+      });
+}
+
+template <int D>
+void interface_damage(const Model<D>& m, const Kokkos::View<double*>& out) {
+  auto ihist = m.ihist;
+  Kokkos::parallel_for(
+      "fdem::interface_damage", Kokkos::RangePolicy<ExecSpace>(0, m.ni), KOKKOS_LAMBDA(const int q) {
+        double s = 0;
+        for (int k = 0; k < D; ++k)
+          s += cohesive_damage(CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)});
+        out(q) = s / D;
+      });
+}
+
+}  // namespace fdem

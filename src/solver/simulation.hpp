@@ -1,0 +1,82 @@
+#pragma once
+// One run's state on the device and the explicit time loop's building blocks. Templated on the
+// dimension (2, 3) and instantiated for both in simulation.cpp.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "io/case.hpp"
+#include "mesh/mesh.hpp"
+#include "model.hpp"
+#include "step.hpp"
+
+namespace fdem {
+
+// Energies and balance at one instant (J). balance_error = (E_now - E_initial) - W_ext.
+struct Energies {
+  double kinetic = 0, strain = 0, interface_elastic = 0, contact_elastic = 0;
+  double fracture = 0, damping = 0, friction = 0;
+  double work_external = 0;  // platens + velocity BCs + gravity + point loads
+  double balance_error = 0;
+  double scale = 0;          // magnitude the error is judged against
+  long damaged = 0, failed = 0;
+};
+
+struct StableStep {
+  double bulk = 0;       // min over elements of altitude / P-wave speed
+  double springs = 0;    // min over interface pairs and platen springs of 2 / omega
+  double critical = 0;   // combined estimate (1/bulk^2 + 1/springs^2)^(-1/2)
+  int bulk_element = -1;
+};
+
+template <int D>
+class Simulation {
+ public:
+  // mesh: after interface insertion. The case supplies materials, loads, platens, damping.
+  Simulation(const Case& c, const HostMesh& mesh);
+
+  Model<D> m;
+  double t = 0, dt = 0;
+  long step_count = 0;
+  StableStep stable;
+
+  void step();                 // one explicit step
+  Energies energies();          // full reductions (output and check steps only)
+  // Throws NumericalError naming the step, time and the first node whose state is not finite.
+  void check_finite();
+  // check_finite, then the energy balance: energy appearing from nowhere (more than half the
+  // energy scale) means the integration is unstable. Throws NumericalError with step, time and dt.
+  void check_stability();
+  // Platen force on the body (3 components) of the last step, and its displacement along its
+  // velocity direction since t = 0.
+  std::array<double, 3> platen_force(int p) const;
+  double platen_displacement(int p) const;
+  // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
+  // forces of the last step (call before step() clears them: use sample_reactions()).
+  const std::vector<std::array<double, 3>>& reactions() const { return reactions_; }
+  void set_sample_reactions(bool on) { sample_reactions_ = on; }
+
+  // Host copies for snapshots.
+  void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
+                std::vector<double>& stress, std::vector<double>& damage);
+
+  const std::vector<std::string>& platen_names() const { return platen_names_; }
+  const std::vector<std::string>& bc_names() const { return bc_names_; }
+
+ private:
+  ForceScatter<D> scatter_;
+  NodeUpdateParams prm_{};
+  double gravity_[3] = {0, 0, 0};
+  double work_damping_ = 0, work_bc_ = 0;
+  double initial_energy_ = 0;
+  std::vector<std::string> platen_names_, bc_names_;
+  std::vector<Kokkos::View<int*>> bc_nodes_;
+  std::vector<std::array<double, 3>> reactions_;
+  bool sample_reactions_ = false;
+  mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenAcc]>())) platen_acc_host_;
+};
+
+extern template class Simulation<2>;
+extern template class Simulation<3>;
+
+}  // namespace fdem

@@ -1,0 +1,152 @@
+// Verification of the cohesive law (METHOD.md section 4) at one integration point: strengths,
+// fracture energies (pure modes, Benzeggagh-Kenane mixed mode), compression, unloading/reloading.
+// The work is integrated numerically from the tractions the law returns, so these tests check the
+// law's consistency, not its bookkeeping.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "cohesive.hpp"
+
+namespace {
+
+using fdem::CohesiveParams;
+using fdem::CohesivePoint;
+
+// Table 1 of the paper (Brazilian disc).
+CohesiveParams table1() {
+  return CohesiveParams{1.10e14, 4.40e13, 8e6, 16.56e6, std::tan(45.0 * M_PI / 180), 75, 1500, 2.0};
+}
+
+struct PathResult {
+  double work = 0;        // integral of t . d(delta), per unit area
+  double peak_tn = 0, peak_ts = 0;
+  double final_damage = 0;
+  double dissipation = 0;  // as reported by cohesive_dissipation
+};
+
+// Follows delta(s) = (dn(s), ds(s)) for s in [0, 1] in n steps, integrating the work (trapezoid).
+template <class Path>
+PathResult follow(const CohesiveParams& p, Path path, int n, CohesivePoint& h) {
+  PathResult r;
+  double dn0, ds0;
+  path(0.0, dn0, ds0);
+  double tn0, kss0, D;
+  fdem::cohesive_update(p, dn0, ds0, h, tn0, kss0, D);
+  double ts0 = kss0 * ds0;
+  for (int i = 1; i <= n; ++i) {
+    double dn, ds, tn, kss;
+    path(static_cast<double>(i) / n, dn, ds);
+    fdem::cohesive_update(p, dn, ds, h, tn, kss, D);
+    const double ts = kss * ds;
+    r.work += 0.5 * (tn + tn0) * (dn - dn0) + 0.5 * (ts + ts0) * (ds - ds0);
+    r.peak_tn = std::max(r.peak_tn, tn);
+    r.peak_ts = std::max(r.peak_ts, ts);
+    dn0 = dn; ds0 = ds; tn0 = tn; ts0 = ts;
+    r.final_damage = D;
+  }
+  r.dissipation = fdem::cohesive_dissipation(h);
+  return r;
+}
+
+TEST(Cohesive, ModeIPeaksAtTensileStrengthAndDissipatesGnc) {
+  const auto p = table1();
+  const double dmax = 3 * 2 * p.Gnc / p.ft;  // well past complete failure
+  CohesivePoint h{0, 0, 0, 0};
+  const auto r = follow(p, [&](double s, double& dn, double& ds) { dn = s * dmax; ds = 0; }, 200000, h);
+  EXPECT_NEAR(r.peak_tn / p.ft, 1.0, 0.005);
+  EXPECT_NEAR(r.work / p.Gnc, 1.0, 0.005);
+  EXPECT_NEAR(r.dissipation / p.Gnc, 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.final_damage, 1.0);
+  EXPECT_NEAR(h.dm0, p.ft / p.kn, 1e-3 * p.ft / p.kn);
+  EXPECT_NEAR(h.dmf, 2 * p.Gnc / p.ft, 1e-3 * 2 * p.Gnc / p.ft);
+}
+
+TEST(Cohesive, ModeIIPeaksAtCohesionAndDissipatesGsc) {
+  const auto p = table1();
+  const double smax = 2 * 2 * p.Gsc / p.c;
+  CohesivePoint h{0, 0, 0, 0};
+  const auto r = follow(p, [&](double s, double& dn, double& ds) { dn = 0; ds = s * smax; }, 200000, h);
+  EXPECT_NEAR(r.peak_ts / p.c, 1.0, 0.005);
+  EXPECT_NEAR(r.work / p.Gsc, 1.0, 0.005);
+  EXPECT_NEAR(r.dissipation / p.Gsc, 1.0, 1e-12);
+  EXPECT_DOUBLE_EQ(r.final_damage, 1.0);
+}
+
+// Proportional mixed-mode paths at three mode ratios: the work equals the BK energy
+// G_c = Gnc + (Gsc - Gnc) (G_S / G_T)^eta with the mode ratio of the path.
+TEST(Cohesive, MixedModeDissipatesBenzeggaghKenaneEnergy) {
+  const auto p = table1();
+  for (double angle_deg : {20.0, 45.0, 70.0}) {
+    const double a = angle_deg * M_PI / 180;
+    const double cn = std::cos(a), cs = std::sin(a);
+    const double GS = p.ks * cs * cs, GT = p.kn * cn * cn + GS;  // ratios, up to a common factor
+    const double gc = p.Gnc + (p.Gsc - p.Gnc) * std::pow(GS / GT, p.eta);
+    const double len = 4 * 2 * p.Gsc / std::min(p.ft, p.c);
+    CohesivePoint h{0, 0, 0, 0};
+    const auto r = follow(p, [&](double s, double& dn, double& ds) { dn = s * len * cn; ds = s * len * cs; },
+                          400000, h);
+    EXPECT_NEAR(r.work / gc, 1.0, 0.005) << "path angle " << angle_deg;
+    EXPECT_NEAR(h.gc / gc, 1.0, 1e-3) << "path angle " << angle_deg;
+    EXPECT_DOUBLE_EQ(r.final_damage, 1.0);
+    // initiation on the Mohr-Coulomb/tension cut-off envelope
+    const double tn0 = p.kn * h.dm0 * cn, ts0 = p.ks * h.dm0 * cs;
+    EXPECT_TRUE(tn0 >= p.ft * 0.999 || ts0 >= p.c * 0.999) << tn0 << " " << ts0;
+    EXPECT_TRUE(tn0 <= p.ft * 1.005 && ts0 <= p.c * 1.005) << tn0 << " " << ts0;
+  }
+}
+
+TEST(Cohesive, CompressionRaisesShearStrengthByTanPhi) {
+  auto p = table1();
+  p.tanphi = std::tan(30.0 * M_PI / 180);
+  for (double sigc : {0.0, 5e6, 20e6}) {
+    const double dn = -sigc / p.kn;
+    const double smax = 3 * (p.c + sigc * p.tanphi) / p.ks;
+    CohesivePoint h{0, 0, 0, 0};
+    const auto r = follow(p, [&](double s, double& a, double& b) { a = dn; b = s * smax; }, 200000, h);
+    EXPECT_NEAR(r.peak_ts / (p.c + sigc * p.tanphi), 1.0, 0.005) << "sigma_c " << sigc;
+    // shear under compression dissipates the mode II energy (normal part never damages)
+    EXPECT_NEAR(r.work / p.Gsc, 1.0, 0.005) << "sigma_c " << sigc;
+  }
+}
+
+TEST(Cohesive, CompressionIsNeverDamaged) {
+  const auto p = table1();
+  CohesivePoint h{0, 0, 0, 0};
+  // fail the point in tension, then close it: compression is still carried by the penalty
+  follow(p, [&](double s, double& dn, double& ds) { dn = s * 3 * 2 * p.Gnc / p.ft; ds = 0; }, 1000, h);
+  double tn, kss, D;
+  fdem::cohesive_update(p, -1e-8, 0.0, h, tn, kss, D);
+  EXPECT_DOUBLE_EQ(D, 1.0);
+  EXPECT_DOUBLE_EQ(tn, p.kn * -1e-8);
+  EXPECT_DOUBLE_EQ(kss, 0.0);
+}
+
+TEST(Cohesive, UnloadingFollowsDamagedSecantAndReloadingDoesNotHeal) {
+  const auto p = table1();
+  const double d0 = p.ft / p.kn, df = 2 * p.Gnc / p.ft;
+  const double dmid = d0 + 0.4 * (df - d0);
+  CohesivePoint h{0, 0, 0, 0};
+  follow(p, [&](double s, double& dn, double& ds) { dn = s * dmid; ds = 0; }, 20000, h);
+  const double Dmid = fdem::cohesive_damage(h);
+  EXPECT_GT(Dmid, 0.5);
+  EXPECT_LT(Dmid, 1.0);
+  // unloading to zero: secant stiffness (1 - D) kn, damage unchanged
+  for (double frac : {0.8, 0.5, 0.1, 0.0}) {
+    double tn, kss, D;
+    fdem::cohesive_update(p, frac * dmid, 0.0, h, tn, kss, D);
+    EXPECT_DOUBLE_EQ(D, Dmid);
+    EXPECT_NEAR(tn, (1 - Dmid) * p.kn * frac * dmid, 1e-9 * p.ft);
+  }
+  // reloading up to the previous maximum: still the same secant, no healing
+  double tn, kss, D;
+  fdem::cohesive_update(p, dmid, 0.0, h, tn, kss, D);
+  EXPECT_DOUBLE_EQ(D, Dmid);
+  // past it, softening continues on the original envelope
+  const double d2 = d0 + 0.6 * (df - d0);
+  fdem::cohesive_update(p, d2, 0.0, h, tn, kss, D);
+  EXPECT_NEAR(tn, p.ft * (df - d2) / (df - d0), 1e-3 * p.ft);
+  EXPECT_GT(D, Dmid);
+}
+
+}  // namespace
