@@ -1,0 +1,487 @@
+// Mesh module: element checks, quality, boundary faces, locality reordering, build_mesh dispatch.
+#include "mesh/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <sstream>
+#include <unordered_set>
+
+#include "common/error.hpp"
+#include "mesh/mesh_internal.hpp"
+
+namespace fdem {
+
+int HostMesh::region_index(const std::string& name) const {
+  for (std::size_t i = 0; i < region_names.size(); ++i)
+    if (region_names[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+namespace mesh_detail {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+double signed_measure(const HostMesh& m, int e) {
+  const int* n = &m.elems[static_cast<std::size_t>(e) * (m.dim + 1)];
+  const double* X = m.X.data();
+  if (m.dim == 2) {
+    const double* a = X + 2 * n[0];
+    const double* b = X + 2 * n[1];
+    const double* c = X + 2 * n[2];
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+  }
+  const double* a = X + 3 * n[0];
+  double u[3], v[3], w[3];
+  for (int k = 0; k < 3; ++k) {
+    u[k] = X[3 * n[1] + k] - a[k];
+    v[k] = X[3 * n[2] + k] - a[k];
+    w[k] = X[3 * n[3] + k] - a[k];
+  }
+  return (u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+          u[2] * (v[0] * w[1] - v[1] * w[0])) /
+         6.0;
+}
+
+std::array<double, 3> centroid(const HostMesh& m, int e) {
+  std::array<double, 3> c{0, 0, 0};
+  const int npe = m.dim + 1;
+  for (int a = 0; a < npe; ++a) {
+    const int n = m.elems[static_cast<std::size_t>(e) * npe + a];
+    for (int k = 0; k < m.dim; ++k) c[k] += m.X[static_cast<std::size_t>(n) * m.dim + k];
+  }
+  for (int k = 0; k < m.dim; ++k) c[k] /= npe;
+  return c;
+}
+
+void orient_positively(HostMesh& m) {
+  const int npe = m.dim + 1;
+  for (int e = 0; e < m.num_elems(); ++e)
+    if (signed_measure(m, e) < 0)
+      std::swap(m.elems[static_cast<std::size_t>(e) * npe + 1],
+                m.elems[static_cast<std::size_t>(e) * npe + 2]);
+}
+
+void check_elements_impl(const HostMesh& mesh, const std::string& source,
+                         const std::vector<std::size_t>* elem_tags) {
+  const int dim = mesh.dim;
+  if (dim != 2 && dim != 3) throw InputError(source + ": mesh dimension must be 2 or 3");
+  const int ne = mesh.num_elems();
+  const int nn = mesh.num_nodes();
+  if (ne == 0) throw InputError(source + ": the mesh contains no elements");
+  if (mesh.elems.size() != static_cast<std::size_t>(ne) * (dim + 1))
+    throw InputError(source + ": element connectivity has a wrong length");
+  if (mesh.elem_region.size() != static_cast<std::size_t>(ne))
+    throw InputError(source + ": element region list has a wrong length");
+  for (double x : mesh.X)
+    if (!std::isfinite(x)) throw InputError(source + ": a node coordinate is not finite");
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a <= dim; ++a) {
+      const int n = mesh.elems[static_cast<std::size_t>(e) * (dim + 1) + a];
+      if (n < 0 || n >= nn)
+        throw InputError(source + ": element " + std::to_string(e) + " refers to node " +
+                         std::to_string(n) + ", which does not exist (" + std::to_string(nn) +
+                         " nodes)");
+    }
+  std::vector<double> meas(ne);
+  double mean = 0;
+  for (int e = 0; e < ne; ++e) {
+    meas[e] = signed_measure(mesh, e);
+    mean += std::abs(meas[e]);
+  }
+  mean /= ne;
+  const double tol = 1e-12 * mean;
+  const char* what = dim == 2 ? "area" : "volume";
+  for (int e = 0; e < ne; ++e) {
+    const bool zero = std::abs(meas[e]) <= tol;
+    const bool inverted = !zero && meas[e] < 0;
+    if (!zero && !inverted) continue;
+    const int r = mesh.elem_region[e];
+    const std::string rname = (r >= 0 && r < static_cast<int>(mesh.region_names.size()))
+                                  ? mesh.region_names[r]
+                                  : std::to_string(r);
+    const auto c = centroid(mesh, e);
+    std::string msg = source + ": element " + std::to_string(e) + " (";
+    if (elem_tags && static_cast<std::size_t>(e) < elem_tags->size())
+      msg += "Gmsh element " + std::to_string((*elem_tags)[e]) + ", ";
+    msg += "region '" + rname + "', centroid (" + fmt(c[0]) + ", " + fmt(c[1]);
+    if (dim == 3) msg += ", " + fmt(c[2]);
+    msg += ")) ";
+    if (inverted) {
+      msg += "is inverted (signed " + std::string(what) + " " + fmt(meas[e]) + ")";
+      msg += dim == 2 ? "; triangles must be counter-clockwise (in Gmsh: orient the curve loop "
+                        "counter-clockwise or use 'ReverseMesh Surface{...};')"
+                      : "; tetrahedra must have positive volume (in Gmsh: 'ReverseMesh "
+                        "Volume{...};')";
+    } else {
+      msg += "has zero " + std::string(what) + " (signed " + what + " " + fmt(meas[e]) +
+             ", mean |" + what + "| " + fmt(mean) + ")";
+    }
+    throw InputError(msg);
+  }
+}
+
+}  // namespace mesh_detail
+
+using namespace mesh_detail;
+
+void check_elements(const HostMesh& mesh, const std::string& source) {
+  check_elements_impl(mesh, source, nullptr);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Quality
+
+namespace {
+
+double dist(const double* a, const double* b, int dim) {
+  double s = 0;
+  for (int k = 0; k < dim; ++k) s += (a[k] - b[k]) * (a[k] - b[k]);
+  return std::sqrt(s);
+}
+
+std::array<double, 3> cross(const std::array<double, 3>& u, const std::array<double, 3>& v) {
+  return {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+}
+
+double norm(const std::array<double, 3>& u) {
+  return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+}
+
+}  // namespace
+
+MeshQuality mesh_quality(const HostMesh& mesh) {
+  MeshQuality q;
+  const int dim = mesh.dim;
+  const int ne = mesh.num_elems();
+  if (ne == 0 || (dim != 2 && dim != 3)) return q;
+  const double pi = std::acos(-1.0);
+  q.min_angle_deg = std::numeric_limits<double>::infinity();
+  q.max_aspect = 0;
+  q.min_size = std::numeric_limits<double>::infinity();
+  q.min_measure = std::numeric_limits<double>::infinity();
+  double edge_sum = 0;
+  std::size_t edge_count = 0;
+  const int npe = dim + 1;
+  for (int e = 0; e < ne; ++e) {
+    const int* n = &mesh.elems[static_cast<std::size_t>(e) * npe];
+    const double meas = signed_measure(mesh, e);
+    q.min_measure = std::min(q.min_measure, meas);
+    double lmax = 0;
+    for (int a = 0; a < npe; ++a)
+      for (int b = a + 1; b < npe; ++b) {
+        const double l = dist(&mesh.X[static_cast<std::size_t>(n[a]) * dim],
+                              &mesh.X[static_cast<std::size_t>(n[b]) * dim], dim);
+        lmax = std::max(lmax, l);
+        edge_sum += l;
+        ++edge_count;
+      }
+    double hmin;
+    if (dim == 2) {
+      // shortest altitude = 2 A / longest edge
+      hmin = 2.0 * std::abs(meas) / lmax;
+      for (int a = 0; a < 3; ++a) {
+        const double* p = &mesh.X[2 * static_cast<std::size_t>(n[a])];
+        const double* p1 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 1) % 3])];
+        const double* p2 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 2) % 3])];
+        const double ux = p1[0] - p[0], uy = p1[1] - p[1];
+        const double vx = p2[0] - p[0], vy = p2[1] - p[1];
+        const double ang = std::atan2(std::abs(ux * vy - uy * vx), ux * vx + uy * vy);
+        q.min_angle_deg = std::min(q.min_angle_deg, ang * 180.0 / pi);
+      }
+    } else {
+      // outward face normals (area-weighted) from the local face table
+      std::array<std::array<double, 3>, 4> nf;
+      double amax = 0;
+      for (int f = 0; f < 4; ++f) {
+        const double* x0 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][0]])];
+        const double* x1 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][1]])];
+        const double* x2 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][2]])];
+        const std::array<double, 3> u{x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2]};
+        const std::array<double, 3> v{x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2]};
+        nf[f] = cross(u, v);
+        amax = std::max(amax, 0.5 * norm(nf[f]));
+      }
+      hmin = amax > 0 ? 3.0 * std::abs(meas) / amax : 0.0;
+      for (int f = 0; f < 4; ++f)
+        for (int g = f + 1; g < 4; ++g) {
+          const double nn = norm(nf[f]) * norm(nf[g]);
+          double c = nn > 0 ? (nf[f][0] * nf[g][0] + nf[f][1] * nf[g][1] + nf[f][2] * nf[g][2]) / nn
+                            : 1.0;
+          c = std::max(-1.0, std::min(1.0, c));
+          const double dihedral = pi - std::acos(c);
+          q.min_angle_deg = std::min(q.min_angle_deg, dihedral * 180.0 / pi);
+        }
+    }
+    q.min_size = std::min(q.min_size, hmin);
+    q.max_aspect = std::max(q.max_aspect, hmin > 0 ? lmax / hmin
+                                                   : std::numeric_limits<double>::infinity());
+  }
+  q.mean_size = edge_count ? edge_sum / static_cast<double>(edge_count) : 0.0;
+  return q;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Boundary faces
+
+namespace {
+
+using FaceKey = std::array<int, 3>;
+
+FaceKey face_key(const int* nodes, int dim) {
+  FaceKey k{nodes[0], nodes[1], dim == 3 ? nodes[2] : -1};
+  sort_face_key(k, dim);
+  return k;
+}
+
+struct FaceKeyHash {
+  std::size_t operator()(const FaceKey& k) const {
+    std::uint64_t h = 1469598103934665603ull;
+    for (int v : k) {
+      h ^= static_cast<std::uint64_t>(static_cast<std::uint32_t>(v));
+      h *= 1099511628211ull;
+    }
+    return static_cast<std::size_t>(h);
+  }
+};
+
+}  // namespace
+
+std::vector<int> boundary_faces(const HostMesh& mesh) {
+  const int dim = mesh.dim;
+  const int npe = dim + 1;
+  const int ne = mesh.num_elems();
+  std::vector<int> out;
+  if (ne == 0) return out;
+  // All element faces, sorted by key, to find those that occur once.
+  struct Entry {
+    FaceKey key;
+    int elem, face;
+  };
+  std::vector<Entry> all;
+  all.reserve(static_cast<std::size_t>(ne) * npe);
+  for (int e = 0; e < ne; ++e)
+    for (int f = 0; f < npe; ++f) {
+      int nodes[3] = {-1, -1, -1};
+      for (int k = 0; k < dim; ++k)
+        nodes[k] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, k)];
+      all.push_back({face_key(nodes, dim), e, f});
+    }
+  std::sort(all.begin(), all.end(), [](const Entry& a, const Entry& b) {
+    return a.key != b.key ? a.key < b.key : (a.elem != b.elem ? a.elem < b.elem : a.face < b.face);
+  });
+  std::unordered_set<FaceKey, FaceKeyHash> iface_keys;
+  for (int i = 0; i < mesh.num_ifaces(); ++i)
+    for (int side = 0; side < 2; ++side)
+      iface_keys.insert(face_key(&mesh.ifaces[static_cast<std::size_t>(2 * dim * i + dim * side)], dim));
+  std::vector<std::pair<int, int>> single;  // (elem, face)
+  for (std::size_t i = 0; i < all.size();) {
+    std::size_t j = i + 1;
+    while (j < all.size() && all[j].key == all[i].key) ++j;
+    if (j - i == 1 && !iface_keys.count(all[i].key)) single.emplace_back(all[i].elem, all[i].face);
+    i = j;
+  }
+  std::sort(single.begin(), single.end());
+  out.reserve(single.size() * dim);
+  for (const auto& [e, f] : single)
+    for (int k = 0; k < dim; ++k)
+      out.push_back(mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, k)]);
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Locality reordering (Morton order of element centroids)
+
+namespace {
+
+std::uint64_t spread2(std::uint64_t x) {  // 32 bits -> every other bit of 64
+  x &= 0xffffffffull;
+  x = (x | (x << 16)) & 0x0000ffff0000ffffull;
+  x = (x | (x << 8)) & 0x00ff00ff00ff00ffull;
+  x = (x | (x << 4)) & 0x0f0f0f0f0f0f0f0full;
+  x = (x | (x << 2)) & 0x3333333333333333ull;
+  x = (x | (x << 1)) & 0x5555555555555555ull;
+  return x;
+}
+
+std::uint64_t spread3(std::uint64_t x) {  // 21 bits -> every third bit of 63
+  x &= 0x1fffffull;
+  x = (x | (x << 32)) & 0x1f00000000ffffull;
+  x = (x | (x << 16)) & 0x1f0000ff0000ffull;
+  x = (x | (x << 8)) & 0x100f00f00f00f00full;
+  x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
+  x = (x | (x << 2)) & 0x1249249249249249ull;
+  return x;
+}
+
+}  // namespace
+
+void reorder_for_locality(HostMesh& mesh) {
+  const int dim = mesh.dim;
+  const int npe = dim + 1;
+  const int ne = mesh.num_elems();
+  const int nn = mesh.num_nodes();
+  if (ne == 0) return;
+  std::vector<std::array<double, 3>> c(ne);
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = std::numeric_limits<double>::infinity();
+    hi[k] = -std::numeric_limits<double>::infinity();
+  }
+  for (int e = 0; e < ne; ++e) {
+    c[e] = centroid(mesh, e);
+    for (int k = 0; k < dim; ++k) {
+      lo[k] = std::min(lo[k], c[e][k]);
+      hi[k] = std::max(hi[k], c[e][k]);
+    }
+  }
+  // Same scale on all axes so that the curve does not stretch thin domains.
+  double ext = 0;
+  for (int k = 0; k < dim; ++k) ext = std::max(ext, hi[k] - lo[k]);
+  const double cells = dim == 2 ? 4294967295.0 : 2097151.0;
+  const double scale = ext > 0 ? cells / ext : 0.0;
+  std::vector<std::uint64_t> code(ne);
+  for (int e = 0; e < ne; ++e) {
+    std::uint64_t q[3] = {0, 0, 0};
+    for (int k = 0; k < dim; ++k) {
+      double v = std::floor((c[e][k] - lo[k]) * scale);
+      v = std::max(0.0, std::min(cells, v));
+      q[k] = static_cast<std::uint64_t>(v);
+    }
+    code[e] = dim == 2 ? (spread2(q[0]) | (spread2(q[1]) << 1))
+                       : (spread3(q[0]) | (spread3(q[1]) << 1) | (spread3(q[2]) << 2));
+  }
+  std::vector<int> order(ne);  // order[new] = old
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return code[a] < code[b]; });
+  std::vector<int> elem_new(ne);  // old -> new
+  for (int i = 0; i < ne; ++i) elem_new[order[i]] = i;
+
+  // Nodes in order of first use by the sorted elements; unused nodes keep their relative order
+  // at the end.
+  std::vector<int> node_new(nn, -1);
+  int next = 0;
+  for (int i = 0; i < ne; ++i)
+    for (int a = 0; a < npe; ++a) {
+      const int n = mesh.elems[static_cast<std::size_t>(order[i]) * npe + a];
+      if (node_new[n] < 0) node_new[n] = next++;
+    }
+  for (int n = 0; n < nn; ++n)
+    if (node_new[n] < 0) node_new[n] = next++;
+
+  std::vector<double> X(mesh.X.size());
+  std::vector<int> origin(nn);
+  for (int n = 0; n < nn; ++n) {
+    for (int k = 0; k < dim; ++k)
+      X[static_cast<std::size_t>(node_new[n]) * dim + k] = mesh.X[static_cast<std::size_t>(n) * dim + k];
+    origin[node_new[n]] =
+        mesh.node_origin.size() == static_cast<std::size_t>(nn) ? mesh.node_origin[n] : n;
+  }
+  std::vector<int> elems(mesh.elems.size());
+  std::vector<int> region(ne);
+  for (int i = 0; i < ne; ++i) {
+    for (int a = 0; a < npe; ++a)
+      elems[static_cast<std::size_t>(i) * npe + a] =
+          node_new[mesh.elems[static_cast<std::size_t>(order[i]) * npe + a]];
+    region[i] = mesh.elem_region[order[i]];
+  }
+  for (auto& [name, set] : mesh.node_sets) {
+    for (int& n : set) n = node_new[n];
+    std::sort(set.begin(), set.end());
+  }
+  // Interfaces (only if someone reorders after insertion): remap, keep each interface's sides,
+  // and sort them again by their A-side element.
+  const int ni = mesh.num_ifaces();
+  if (ni > 0) {
+    std::vector<int> idx(ni);
+    std::iota(idx.begin(), idx.end(), 0);
+    for (int& n : mesh.ifaces) n = node_new[n];
+    for (int& e : mesh.iface_elems) e = elem_new[e];
+    std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) {
+      return mesh.iface_elems[2 * a] < mesh.iface_elems[2 * b];
+    });
+    std::vector<int> ifaces(mesh.ifaces.size()), iface_elems(mesh.iface_elems.size());
+    for (int i = 0; i < ni; ++i) {
+      for (int k = 0; k < 2 * dim; ++k)
+        ifaces[static_cast<std::size_t>(2 * dim) * i + k] = mesh.ifaces[static_cast<std::size_t>(2 * dim) * idx[i] + k];
+      iface_elems[2 * i] = mesh.iface_elems[2 * idx[i]];
+      iface_elems[2 * i + 1] = mesh.iface_elems[2 * idx[i] + 1];
+    }
+    mesh.ifaces.swap(ifaces);
+    mesh.iface_elems.swap(iface_elems);
+  }
+  mesh.X.swap(X);
+  mesh.elems.swap(elems);
+  mesh.elem_region.swap(region);
+  mesh.node_origin.swap(origin);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dispatch
+
+namespace {
+
+int cells_for(const std::string& kind, const char* axis, int given, double length, double h) {
+  if (given > 0) return given;
+  if (given < 0)
+    throw InputError("mesh '" + kind + "': cells along " + axis + " must be positive (got " +
+                     std::to_string(given) + ")");
+  if (!(h > 0))
+    throw InputError("mesh '" + kind + "': give either cells or a positive element_size");
+  if (!(length > 0))
+    throw InputError("mesh '" + kind + "': size along " + axis + " must be positive");
+  const double n = std::ceil(length / h - 1e-9);
+  if (n > 1e7) throw InputError("mesh '" + kind + "': too many cells along " + axis);
+  return std::max(1, static_cast<int>(n));
+}
+
+}  // namespace
+
+HostMesh build_mesh(const MeshSpec& spec, int dim) {
+  if (dim != 2 && dim != 3)
+    throw InputError("mesh: dimension must be 2 or 3 (got " + std::to_string(dim) + ")");
+  auto need_dim = [&](int d) {
+    if (d != dim)
+      throw InputError("mesh kind '" + spec.kind + "' is " + std::to_string(d) +
+                       "D but the case is " + std::to_string(dim) + "D");
+  };
+  const std::string region = spec.region.empty() ? std::string("body") : spec.region;
+  if (spec.kind == "file") {
+    if (spec.file.empty()) throw InputError("mesh kind 'file' needs a file name");
+    return read_gmsh(spec.file, dim);
+  }
+  if (spec.kind == "rectangle") {
+    need_dim(2);
+    const int nx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
+    const int ny = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
+    return generate_crossed_rectangle(spec.origin[0], spec.origin[1], spec.size[0], spec.size[1],
+                                      nx, ny, region);
+  }
+  if (spec.kind == "box") {
+    need_dim(3);
+    const int nx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
+    const int ny = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
+    const int nz = cells_for(spec.kind, "z", spec.cells[2], spec.size[2], spec.element_size);
+    return generate_box(spec.origin, spec.size, nx, ny, nz, region);
+  }
+  if (spec.kind == "disc") {
+    need_dim(2);
+    return generate_disc(spec.origin[0], spec.origin[1], spec.radius, spec.element_size, region);
+  }
+  if (spec.kind == "sphere") {
+    need_dim(3);
+    return generate_sphere(spec.origin, spec.radius, spec.element_size, region);
+  }
+  throw InputError("mesh: unknown kind '" + spec.kind +
+                   "' (expected file, rectangle, disc, box or sphere)");
+}
+
+}  // namespace fdem

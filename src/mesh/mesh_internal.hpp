@@ -1,0 +1,51 @@
+#pragma once
+// Helpers shared by the files of the mesh module (not part of its public interface).
+#include <array>
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mesh/mesh.hpp"
+
+namespace fdem::mesh_detail {
+
+// Local faces of a positively oriented simplex, each ordered so that the normal by the convention
+// of mesh.hpp (2D: n = (t_y, -t_x), t = x1 - x0; 3D: n = (x1 - x0) x (x2 - x0)) points OUT of
+// the element. 2D: 3 edges of 2 nodes; 3D: 4 triangles of 3 nodes (face f is opposite vertex f
+// in 3D, opposite vertex (f + 2) % 3 in 2D).
+inline constexpr int kFaces2[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+inline constexpr int kFaces3[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+inline int faces_per_elem(int dim) { return dim + 1; }
+// Local node `k` (0..dim-1) of local face `f`.
+inline int face_node(int dim, int f, int k) { return dim == 2 ? kFaces2[f][k] : kFaces3[f][k]; }
+
+// Sort the first `dim` (2 or 3) entries of a face key in place (third entry -1 in 2D).
+inline void sort_face_key(std::array<int, 3>& k, int dim) {
+  auto order = [&](int i, int j) {
+    if (k[j] < k[i]) std::swap(k[i], k[j]);
+  };
+  order(0, 1);
+  if (dim == 3) {
+    order(1, 2);
+    order(0, 1);
+  }
+}
+
+// Signed area (2D) or volume (3D) of element e; positive when the element is positively oriented.
+double signed_measure(const HostMesh& m, int e);
+// Centroid of element e (3 components, z = 0 in 2D).
+std::array<double, 3> centroid(const HostMesh& m, int e);
+
+// Swap two nodes of every element with negative signed measure (generator output only).
+void orient_positively(HostMesh& m);
+
+// Element check with optional original element tags for the message (read_gmsh passes Gmsh's).
+void check_elements_impl(const HostMesh& mesh, const std::string& source,
+                         const std::vector<std::size_t>* elem_tags);
+
+// Format a double compactly (like %g with 6 significant digits).
+std::string fmt(double v);
+
+}  // namespace fdem::mesh_detail
