@@ -16,10 +16,10 @@ struct CohesiveParams {
 };
 
 // History of one integration point. dm0 == 0: not initiated yet. After initiation:
-// dm0 = equivalent separation at initiation, dmf = at complete failure, dmax = largest reached,
-// gc = mixed-mode fracture energy fixed at initiation.
+// dm0 = equivalent separation at initiation, dmf = at complete failure (from the mixed-mode
+// fracture energy fixed at initiation), dmax = largest reached, wd = energy dissipated per unit area.
 struct CohesivePoint {
-  double dmax, dm0, dmf, gc;
+  double dmax, dm0, dmf, wd;
 };
 
 KOKKOS_INLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
@@ -28,13 +28,8 @@ KOKKOS_INLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
   return s.dmf * (s.dmax - s.dm0) / (s.dmax * (s.dmf - s.dm0));
 }
 
-// Energy dissipated per unit area so far (exact for the linear-softening equivalent law:
-// gc * (dmax - dm0) / (dmf - dm0), capped at gc).
-KOKKOS_INLINE_FUNCTION double cohesive_dissipation(const CohesivePoint& s) {
-  if (s.dm0 <= 0.0 || s.dmax <= s.dm0) return 0.0;
-  if (s.dmax >= s.dmf) return s.gc;
-  return s.gc * (s.dmax - s.dm0) / (s.dmf - s.dm0);
-}
+// Energy dissipated per unit area so far.
+KOKKOS_INLINE_FUNCTION double cohesive_dissipation(const CohesivePoint& s) { return s.wd; }
 
 // Updates the history with the separation (dn normal, ds = |tangential|) and returns the
 // tractions: tn (tension positive) and the secant shear stiffness kss so that the shear traction
@@ -61,10 +56,18 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
       if (dmf < dm * (1.0 + 1e-12)) dmf = dm * (1.0 + 1e-12);  // brittle limit: fails at once
       s.dm0 = dm;
       s.dmf = dmf;
-      s.gc = gc;
       s.dmax = dm;
+      s.wd = 0.0;
     }
   } else if (dm > s.dmax) {
+    // Dissipation = integral of psi0 dD with psi0 = K dm^2 / 2 the undamaged energy of the
+    // current mode (K = (kn <dn>+^2 + ks ds^2) / dm^2). While loading, dm^2 dD = dmf dm0 /
+    // (dmf - dm0) d(dmax), so the increment is exact for any step along a proportional path.
+    const double a = kmin(s.dmax, s.dmf), b = kmin(dm, s.dmf);
+    if (b > a) {
+      const double K = (p.kn * dnp * dnp + p.ks * ds * ds) / (dm * dm);
+      s.wd += 0.5 * K * s.dmf * s.dm0 / (s.dmf - s.dm0) * (b - a);
+    }
     s.dmax = dm;
   }
   D = cohesive_damage(s);

@@ -53,9 +53,10 @@ struct Model {
   Kokkos::View<double* [3]> mat;      // per material: lambda (plane-stress corrected), mu, density
 
   // interfaces: node pairs (A0..A{D-1}, B0..B{D-1}); per integration point (one per node pair)
-  // the history dmax, dm0, dmf, gc.
+  // the history dmax, dm0, dmf, wd (see cohesive.hpp).
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
+  Kokkos::View<double*> iarea;        // reference tributary area of each integration point
   CohesiveParams coh{};
 
   // outer boundary: nodes that can touch platens, with their contact (tributary) areas

@@ -17,7 +17,9 @@ constexpr int kChunk =
     Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? kScatterChunk : 1;
 
 // Geometry of an interface: unit normal n (from side A to side B) of the mid-surface and the
-// tributary area of each integration point (nodal integration: one point per node pair).
+// tributary area of each integration point (nodal integration: one point per node pair) in the
+// current configuration. The forces use the reference area (tractions per unit reference area,
+// so that they derive from a stored energy); the current one serves the set-up.
 template <int D>
 KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
                                             double thickness, double (&n)[D], double& area_pt) {
@@ -40,31 +42,81 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
   }
 }
 
-// Cohesive forces of one interface: updates the history of its points and returns the force on
-// each A-side node (the B-side node gets the opposite). Also the mean damage.
+// Cohesive forces of one interface: updates the history of its points and returns the forces on
+// its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
+// point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
+// |delta_k - (delta_k . n) n|) at fixed damage, including the change of the normal n with the
+// nodes (it matters once faces have slid or opened far), so that the interface neither creates
+// nor loses energy.
 template <int D>
 KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
-                                               double thickness, const CohesiveParams& p,
-                                               CohesivePoint (&h)[D], double (&fa)[D][D]) {
-  double n[D], ap;
-  interface_frame<D>(xa, xb, thickness, n, ap);
+                                               double ap, const CohesiveParams& p,
+                                               CohesivePoint (&h)[D], double (&fa)[D][D],
+                                               double (&fb)[D][D]) {
+  double n[D], ap_cur;
+  interface_frame<D>(xa, xb, 1.0, n, ap_cur);
   double dsum = 0;
+  double g[D];  // dU/dn
+  for (int i = 0; i < D; ++i) g[i] = 0;
   for (int k = 0; k < D; ++k) {
-    double d[D], dn = 0;
+    double d[D], ds[D], dn = 0;
     for (int i = 0; i < D; ++i) {
       d[i] = xb[k][i] - xa[k][i];
       dn += d[i] * n[i];
     }
     double ds2 = 0;
     for (int i = 0; i < D; ++i) {
-      d[i] -= dn * n[i];
-      ds2 += d[i] * d[i];
+      ds[i] = d[i] - dn * n[i];
+      ds2 += ds[i] * ds[i];
     }
     double tn, kss, dmg;
     cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
     dsum += dmg;
-    for (int i = 0; i < D; ++i) fa[k][i] = ap * (tn * n[i] + kss * d[i]);
+    for (int i = 0; i < D; ++i) {
+      fa[k][i] = ap * (tn * n[i] + kss * ds[i]);
+      fb[k][i] = -fa[k][i];
+      g[i] += ap * (tn - kss * dn) * d[i];
+    }
   }
+  // dU/dn -> forces through the mid-surface points m_k = (xa_k + xb_k) / 2.
+  double gp[D], gn = 0;  // projection (I - n n^T) g
+  for (int i = 0; i < D; ++i) gn += g[i] * n[i];
+  for (int i = 0; i < D; ++i) gp[i] = g[i] - gn * n[i];
+  double dm[D][D];  // dU/dm_k
+  if constexpr (D == 2) {
+    // n = (t_y, -t_x) / L with t = m1 - m0: dU/dt = (1/L) R^T gp, R^T (gx, gy) = (-gy, gx)
+    const double tx = 0.5 * (xa[1][0] + xb[1][0] - xa[0][0] - xb[0][0]);
+    const double ty = 0.5 * (xa[1][1] + xb[1][1] - xa[0][1] - xb[0][1]);
+    const double L = kmath::sqrt(tx * tx + ty * ty);
+    const double Gt[2] = {-gp[1] / L, gp[0] / L};
+    for (int i = 0; i < 2; ++i) {
+      dm[1][i] = Gt[i];
+      dm[0][i] = -Gt[i];
+    }
+  } else {
+    // n = c / |c|, c = a x b, a = m1 - m0, b = m2 - m0: dU/dc = gp / |c|,
+    // dU/da = b x hc, dU/db = hc x a
+    double a[3], b[3];
+    for (int i = 0; i < 3; ++i) {
+      a[i] = 0.5 * (xa[1][i] + xb[1][i] - xa[0][i] - xb[0][i]);
+      b[i] = 0.5 * (xa[2][i] + xb[2][i] - xa[0][i] - xb[0][i]);
+    }
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double cl = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const double hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
+    const double da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
+    const double db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
+    for (int i = 0; i < 3; ++i) {
+      dm[1][i] = da[i];
+      dm[2][i] = db[i];
+      dm[0][i] = -da[i] - db[i];
+    }
+  }
+  for (int k = 0; k < D; ++k)
+    for (int i = 0; i < D; ++i) {
+      fa[k][i] -= 0.5 * dm[k][i];
+      fb[k][i] -= 0.5 * dm[k][i];
+    }
   return dsum / D;
 }
 
@@ -82,8 +134,8 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
   auto mat = m.mat;
   auto iface = m.iface;
   auto ihist = m.ihist;
+  auto iarea = m.iarea;
   const auto coh = m.coh;
-  const double th = m.thickness;
   sf.reset();
   Kokkos::parallel_for(
       "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc + nic), KOKKOS_LAMBDA(const int c) {
@@ -104,7 +156,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
         } else {
           const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
           for (int q = i0; q < i1; ++q) {
-            double xa[D][D], xb[D][D], fa[D][D];
+            double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
             CohesivePoint h[D];
             for (int k = 0; k < D; ++k) {
               for (int i = 0; i < D; ++i) {
@@ -113,15 +165,15 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
               }
               h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
             }
-            interface_forces<D>(xa, xb, th, coh, h, fa);
+            interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
             for (int k = 0; k < D; ++k) {
               ihist(q, k, 0) = h[k].dmax;
               ihist(q, k, 1) = h[k].dm0;
               ihist(q, k, 2) = h[k].dmf;
-              ihist(q, k, 3) = h[k].gc;
+              ihist(q, k, 3) = h[k].wd;
               for (int i = 0; i < D; ++i) {
                 acc(iface(q, k), i) += fa[k][i];
-                acc(iface(q, D + k), i) -= fa[k][i];
+                acc(iface(q, D + k), i) += fb[k][i];
               }
             }
           }
@@ -203,11 +255,18 @@ struct NodeUpdateParams {
   bool has_fext;
 };
 
+// Sums of one node update: energy dissipated by damping and work of the velocity BCs over this
+// step (0, 1); on sampled steps also the kinetic energy 0.5 m v(n-1/2).v(n+1/2) (the leap-frog's
+// conserved form) (2), and the work of gravity (3) and of the point loads (4) at x(n).
+using NodeSums = SumN<5>;
+
 // Central-difference update of all nodes with damping and velocity BCs; zeroes the force for the
-// next step. Returns (energy dissipated by damping, work of the velocity BCs) over this step.
-template <int D>
-SumN<2> update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
+// next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
+// the kinetic-energy change of a node exactly the work of the forces on it.
+template <int D, bool Sample>
+NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
   auto x = m.x;
+  auto X = m.X;
   auto v = m.v;
   auto f = m.f;
   auto mass = m.mass;
@@ -216,21 +275,22 @@ SumN<2> update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
   auto fext = m.fext;
   const NodeUpdateParams p = prm;
   const double th = p.t + 0.5 * p.dt;  // velocities live at half steps
-  SumN<2> out;
+  NodeSums out;
   Kokkos::parallel_reduce(
       "fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-      KOKKOS_LAMBDA(const int i, SumN<2>& s) {
+      KOKKOS_LAMBDA(const int i, NodeSums& s) {
         const double mi = mass(i);
         const int bc = node_bc(i);
         for (int k = 0; k < D; ++k) {
           double F = f(i, k) + mi * p.gravity[k];
-          if (p.has_fext) F += fext(i, k);
+          const double fe = p.has_fext ? fext(i, k) : 0.0;
+          F += fe;
           const double vo = v(i, k);
           double vn;
           if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
             const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
             vn = bcs(bc).vel[k] * r;
-            s.v[1] += (mi * (vn - vo) / p.dt - F) * vn * p.dt;
+            s.v[1] += (mi * (vn - vo) / p.dt - F) * 0.5 * (vo + vn) * p.dt;
           } else {
             double fd = -p.cmass * mi * vo;
             if (p.alpha > 0) {
@@ -239,6 +299,12 @@ SumN<2> update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
             }
             vn = vo + p.dt * (F + fd) / mi;
             s.v[0] -= fd * 0.5 * (vo + vn) * p.dt;
+          }
+          if (Sample) {
+            const double u = x(i, k) - X(i, k);
+            s.v[2] += 0.5 * mi * vo * vn;
+            s.v[3] += mi * p.gravity[k] * u;
+            s.v[4] += fe * u;
           }
           v(i, k) = vn;
           x(i, k) += p.dt * vn;
@@ -283,8 +349,8 @@ SumN<4> interface_state(const Model<D>& m) {
   auto x = m.x;
   auto iface = m.iface;
   auto ihist = m.ihist;
+  auto iarea = m.iarea;
   const auto coh = m.coh;
-  const double th = m.thickness;
   SumN<4> out;
   Kokkos::parallel_reduce(
       "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
@@ -295,7 +361,8 @@ SumN<4> interface_state(const Model<D>& m) {
             xa[k][i] = x(iface(q, k), i);
             xb[k][i] = x(iface(q, D + k), i);
           }
-        interface_frame<D>(xa, xb, th, n, ap);
+        interface_frame<D>(xa, xb, 1.0, n, ap);
+        ap = iarea(q);
         bool any = false, all = true;
         for (int k = 0; k < D; ++k) {
           const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
@@ -313,31 +380,6 @@ SumN<4> interface_state(const Model<D>& m) {
         }
         s.v[2] += any ? 1.0 : 0.0;
         s.v[3] += all ? 1.0 : 0.0;
-      },
-      out);
-  return out;
-}
-
-// Nodes: (kinetic energy, work of gravity, work of point loads, max |v|).
-template <int D>
-SumN<3> node_energy(const Model<D>& m, const double (&gravity)[3]) {
-  auto x = m.x;
-  auto X = m.X;
-  auto v = m.v;
-  auto mass = m.mass;
-  auto fext = m.fext;
-  const bool has_fext = m.fext.extent(0) > 0;
-  const double g[3] = {gravity[0], gravity[1], gravity[2]};
-  SumN<3> out;
-  Kokkos::parallel_reduce(
-      "fdem::node_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-      KOKKOS_LAMBDA(const int i, SumN<3>& s) {
-        for (int k = 0; k < D; ++k) {
-          const double u = x(i, k) - X(i, k);
-          s.v[0] += 0.5 * mass(i) * v(i, k) * v(i, k);
-          s.v[1] += mass(i) * g[k] * u;
-          if (has_fext) s.v[2] += fext(i, k) * u;
-        }
       },
       out);
   return out;

@@ -123,8 +123,10 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   std::unique_ptr<SnapshotWriter> snaps;
   if (c.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(out, mesh);
   std::vector<double> sx, su, sv, ss, sd;
+  long last_snap_step = -1;
   auto snapshot = [&]() {
-    if (!snaps) return;
+    if (!snaps || sim.step_count == last_snap_step) return;
+    last_snap_step = sim.step_count;
     sim.download(sx, su, sv, ss, sd);
     SnapshotFrame fr;
     fr.time = sim.t;
@@ -149,13 +151,13 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
 
   auto write_row = [&]() -> bool {  // returns true when the stop condition is met
     last = sim.energies();
-    std::vector<double> row = {sim.t, static_cast<double>(sim.step_count)};
+    std::vector<double> row = {last.time, static_cast<double>(last.step)};
     bool stop = false;
     for (int p = 0; p < np; ++p) {
       const auto F = sim.platen_force(p);
       const auto& P = sim.m.platens.p[p];
       const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
-      const double disp = sim.platen_displacement(p);
+      const double disp = sim.platen_displacement(p, last.time);
       row.push_back(disp);
       for (int k = 0; k < D; ++k) row.push_back(F[k]);
       row.push_back(load);
@@ -185,20 +187,23 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
                  c.name.c_str(), sim.m.nn, sim.m.ne, sim.m.ni, sim.dt, sim.dt / sim.stable.critical,
                  sim.stable.critical, std::ceil(c.end_time / sim.dt));
   }
-  write_row();
-  next_hist = hist_dt;
   snapshot();
   next_snap = c.snapshot_interval;
+  next_hist = 0;
+  bool last_was_row = false;
   const auto loop0 = Clock::now();
   while (sim.t < c.end_time * (1 - 1e-12)) {
     if (c.max_steps > 0 && sim.step_count >= c.max_steps) {
       stop_reason = "max_steps";
       break;
     }
-    const bool hist = sim.t + sim.dt >= next_hist * (1 - 1e-12);
+    // history rows and checks sample the state at the start of a step
+    const bool hist = sim.t >= next_hist * (1 - 1e-12);
+    const bool chk = c.check_interval > 0 && (sim.step_count + 1) % c.check_interval == 0;
     sim.set_sample_reactions(hist);
-    sim.step();
-    if (c.check_interval > 0 && sim.step_count % c.check_interval == 0) check();
+    sim.step(hist || chk);
+    if (hist || chk) check();
+    last_was_row = hist;
     if (hist) {
       next_hist += hist_dt;
       if (write_row()) {
@@ -215,9 +220,13 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   const double loop_wall = std::chrono::duration<double>(Clock::now() - loop0).count();
   progress.update(sim.step_count, sim.t, c.end_time, true);
   progress.done();
-  check();
-  write_row();
-  if (snaps && (snaps->frames() == 0 || sim.t > next_snap - c.snapshot_interval)) snapshot();
+  if (!last_was_row) {  // a final row: one more sampled step
+    sim.set_sample_reactions(true);
+    sim.step(true);
+    check();
+    write_row();
+  }
+  snapshot();
 
   nlohmann::json summary;
   summary["case"] = c.name;

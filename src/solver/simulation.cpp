@@ -180,11 +180,13 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   stable.springs = std::numeric_limits<double>::infinity();
   m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
   m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
+  m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
   if (ni > 0) {
     if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
     const auto& im = c.interface_materials[c.fracture_material];
     m.coh = CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta};
     auto if_h = mirror(m.iface);
+    auto ia_h = mirror(m.iarea);
     const double kmax = std::max(im.kn, im.ks);
     for (int q = 0; q < ni; ++q) {
       double xa[D][D], xb[D][D], n[D], ap;
@@ -195,12 +197,14 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
           xb[k][i] = xa[k][i];
         }
       interface_frame<D>(xa, xb, m.thickness, n, ap);
+      ia_h(q) = ap;
       for (int k = 0; k < D; ++k) {
         const double w = std::sqrt(kmax * ap * (1 / mass[if_h(q, k)] + 1 / mass[if_h(q, D + k)]));
         stable.springs = std::min(stable.springs, 2.0 / w);
       }
     }
     Kokkos::deep_copy(m.iface, if_h);
+    Kokkos::deep_copy(m.iarea, ia_h);
   }
 
   // ---- outer boundary (platen contact) ----
@@ -361,6 +365,20 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
     Kokkos::deep_copy(m.v, v_h);
   }
 
+  // Velocity BCs hold from the start: v(-dt/2) of a constrained component is its prescribed value
+  // (0 for a ramp), so the run does not begin with an impulse.
+  if (!table.empty()) {
+    auto v_h = mirror(m.v);
+    Kokkos::deep_copy(v_h, m.v);
+    for (int i = 0; i < nn; ++i) {
+      if (node_bc[i] < 0) continue;
+      const BCDev& b = table[node_bc[i]];
+      for (int k = 0; k < D; ++k)
+        if (b.mask >> k & 1) v_h(i, k) = b.ramp > 0 ? 0.0 : b.vel[k];
+    }
+    Kokkos::deep_copy(m.v, v_h);
+  }
+
   // ---- time step ----
   stable.critical = 1.0 / std::sqrt(1.0 / (stable.bulk * stable.bulk) +
                                     (std::isfinite(stable.springs)
@@ -374,13 +392,11 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   for (int k = 0; k < 3; ++k) prm_.gravity[k] = c.gravity[k];
   prm_.has_fext = m.fext.extent(0) > 0;
   scatter_ = ForceScatter<D>(m.f);
-  initial_energy_ = 0;
-  const auto e0 = energies();
-  initial_energy_ = e0.kinetic + e0.strain + e0.interface_elastic + e0.contact_elastic;
 }
 
 template <int D>
-void Simulation<D>::step() {
+void Simulation<D>::step(bool sample) {
+  sample = sample || !have_reference_;
   compute_forces<D>(m, scatter_);
   apply_platens<D>(m, t, dt);
   if (sample_reactions_) {
@@ -390,42 +406,51 @@ void Simulation<D>::step() {
       for (int k = 0; k < 3; ++k) reactions_[b][k] = -s[k];
     }
   }
+  Energies e;
+  e.time = t;
+  e.step = step_count;
+  if (sample) {  // state at time t: positions x(n), forces and interface history at x(n)
+    e.strain = strain_energy<D>(m);
+    if (m.ni > 0) {
+      const auto is = interface_state<D>(m);
+      e.interface_elastic = is.v[0];
+      e.fracture = is.v[1];
+      e.damaged = static_cast<long>(is.v[2]);
+      e.failed = static_cast<long>(is.v[3]);
+    }
+    e.contact_elastic = platen_energy<D>(m, t);
+  }
   prm_.t = t;
   prm_.dt = dt;
-  const SumN<2> w = update_nodes<D>(m, prm_);
+  const NodeSums w = sample ? update_nodes<D, true>(m, prm_) : update_nodes<D, false>(m, prm_);
+  if (sample) {
+    // Works done by time t: everything before this step plus half of this step's increment
+    // (the increments are centred on x(n)).
+    Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
+    double wp = 0;
+    for (int p = 0; p < m.platens.count; ++p) {
+      double inc = 0;
+      for (int k = 0; k < 3; ++k) inc += platen_acc_host_(p, k) * m.platens.p[p].vel[k] * dt;
+      wp += platen_acc_host_(p, 3) - 0.5 * inc;
+      e.friction += platen_acc_host_(p, 4);
+    }
+    e.kinetic = w.v[2];
+    e.damping = work_damping_ + 0.5 * w.v[0];
+    e.work_external = wp + work_bc_ + 0.5 * w.v[1] + w.v[3] + w.v[4];
+    const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
+                       e.fracture + e.damping + e.friction;
+    if (!have_reference_) {
+      reference_ = now - e.work_external;
+      have_reference_ = true;
+    }
+    e.balance_error = now - e.work_external - reference_;
+    e.scale = std::max({std::fabs(now), std::fabs(reference_) + std::fabs(e.work_external), 1e-300});
+    energies_ = e;
+  }
   work_damping_ += w.v[0];
   work_bc_ += w.v[1];
   t += dt;
   ++step_count;
-}
-
-template <int D>
-Energies Simulation<D>::energies() {
-  Energies e;
-  const auto ne = node_energy<D>(m, gravity_);
-  e.kinetic = ne.v[0];
-  e.strain = strain_energy<D>(m);
-  if (m.ni > 0) {
-    const auto is = interface_state<D>(m);
-    e.interface_elastic = is.v[0];
-    e.fracture = is.v[1];
-    e.damaged = static_cast<long>(is.v[2]);
-    e.failed = static_cast<long>(is.v[3]);
-  }
-  e.contact_elastic = platen_energy<D>(m, t);
-  Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
-  double wp = 0;
-  for (int p = 0; p < m.platens.count; ++p) {
-    wp += platen_acc_host_(p, 3);
-    e.friction += platen_acc_host_(p, 4);
-  }
-  e.damping = work_damping_;
-  e.work_external = wp + work_bc_ + ne.v[1] + ne.v[2];
-  const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic + e.fracture +
-                     e.damping + e.friction;
-  e.balance_error = now - initial_energy_ - e.work_external;
-  e.scale = std::max({now, initial_energy_ + std::fabs(e.work_external), 1e-300});
-  return e;
 }
 
 template <int D>
@@ -460,7 +485,12 @@ void Simulation<D>::check_finite() {
 template <int D>
 void Simulation<D>::check_stability() {
   check_finite();
-  const Energies e = energies();
+  const Energies& e = energies_;
+  if (!std::isfinite(e.kinetic) || !std::isfinite(e.strain)) {
+    std::ostringstream os;
+    os << "energy became non-finite at step " << step_count << ", time " << t << " s";
+    throw NumericalError(os.str());
+  }
   if (step_count > 10 && e.balance_error > 0.5 * e.scale) {
     std::ostringstream os;
     os << "energy balance blew up at step " << step_count << ", time " << t
@@ -479,9 +509,9 @@ std::array<double, 3> Simulation<D>::platen_force(int p) const {
 }
 
 template <int D>
-double Simulation<D>::platen_displacement(int p) const {
+double Simulation<D>::platen_displacement(int p, double at) const {
   const auto& P = m.platens.p[p];
-  return std::sqrt(P.vel[0] * P.vel[0] + P.vel[1] * P.vel[1] + P.vel[2] * P.vel[2]) * t;
+  return std::sqrt(P.vel[0] * P.vel[0] + P.vel[1] * P.vel[1] + P.vel[2] * P.vel[2]) * at;
 }
 
 template <int D>

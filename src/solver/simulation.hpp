@@ -14,6 +14,8 @@ namespace fdem {
 
 // Energies and balance at one instant (J). balance_error = (E_now - E_initial) - W_ext.
 struct Energies {
+  double time = 0;           // the instant they describe (start of the sampled step)
+  long step = 0;
   double kinetic = 0, strain = 0, interface_elastic = 0, contact_elastic = 0;
   double fracture = 0, damping = 0, friction = 0;
   double work_external = 0;  // platens + velocity BCs + gravity + point loads
@@ -40,17 +42,22 @@ class Simulation {
   long step_count = 0;
   StableStep stable;
 
-  void step();                 // one explicit step
-  Energies energies();          // full reductions (output and check steps only)
+  // One explicit step. With sample = true the energies at the step's start time are computed
+  // (full reductions: do it on output and check steps only) and kept for energies().
+  void step(bool sample = false);
+  // Energies at the last sampled step (the first step is always sampled).
+  const Energies& energies() const { return energies_; }
+  // Takes the state at the next step as the energy reference (after changing x or v by hand).
+  void reset_energy_reference() { have_reference_ = false; }
   // Throws NumericalError naming the step, time and the first node whose state is not finite.
   void check_finite();
   // check_finite, then the energy balance: energy appearing from nowhere (more than half the
   // energy scale) means the integration is unstable. Throws NumericalError with step, time and dt.
   void check_stability();
   // Platen force on the body (3 components) of the last step, and its displacement along its
-  // velocity direction since t = 0.
+  // velocity direction at time `at`.
   std::array<double, 3> platen_force(int p) const;
-  double platen_displacement(int p) const;
+  double platen_displacement(int p, double at) const;
   // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
   // forces of the last step (call before step() clears them: use sample_reactions()).
   const std::vector<std::array<double, 3>>& reactions() const { return reactions_; }
@@ -68,7 +75,9 @@ class Simulation {
   NodeUpdateParams prm_{};
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
-  double initial_energy_ = 0;
+  double reference_ = 0;  // energy minus external work at the reference step
+  bool have_reference_ = false;
+  Energies energies_;
   std::vector<std::string> platen_names_, bc_names_;
   std::vector<Kokkos::View<int*>> bc_nodes_;
   std::vector<std::array<double, 3>> reactions_;

@@ -1,0 +1,277 @@
+// Solver verification: effective modulus of elements in series with interfaces, wave speed and
+// reflection, energy balance through dynamic fracture, and stability of the time integration.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "common/error.hpp"
+#include "solver/simulation.hpp"
+#include "solver_fixtures.hpp"
+
+namespace {
+
+using namespace fdem;
+
+// Node x-velocity (host copy) of node i.
+double vx(const Simulation<2>& sim, int i) {
+  auto v = Kokkos::subview(sim.m.v, i, 0);
+  double out;
+  Kokkos::deep_copy(out, v);
+  return out;
+}
+double xpos(const Simulation<2>& sim, int i) {
+  auto v = Kokkos::subview(sim.m.x, i, 0);
+  double out;
+  Kokkos::deep_copy(out, v);
+  return out;
+}
+
+// E_eff = E kn d / (E + kn d) for blocks of size d in series with interfaces (METHOD.md sec. 5).
+TEST(Solver, EffectiveModulusOfBlocksInSeriesWithInterfaces) {
+  const int nb = 10;
+  const double d = 0.01, h = 0.01, E = 30e9;
+  for (double alpha : {0.1, 1.0}) {  // alpha = E / (kn d)
+    const double kn = E / (alpha * d);
+    auto c = fdem_test::basic_case(2, E, 0.0, 2500);
+    c.plane_stress = true;
+    c.interface_materials = {fdem_test::strong_interface(kn, kn / 2)};
+    c.fracture_material = 0;
+    c.local_damping = 0.7;
+    VelocityBC left;
+    left.set = "left";
+    left.active = {true, false, false};
+    VelocityBC corner;
+    corner.set = "corner";
+    corner.active = {false, true, false};
+    c.velocity_bcs = {left, corner};
+    const double sigma = 1e5;  // Pa: strain ~ 3e-6, far in the linear range
+    c.point_loads = {PointLoad{"right", {sigma * h * c.thickness, 0, 0}}};
+    const auto mesh = fdem_test::block_bar(nb, d, h);
+    Simulation<2> sim(c, mesh);
+    for (int s = 0; s < 40000; ++s) sim.step();
+    // strain over the periodic part: from block 1's left edge to block nb-1's left edge spans
+    // nb-2 blocks and nb-2 interfaces
+    const int first = 4 * 1, last = 4 * (nb - 1), tip = 4 * (nb - 1) + 1;
+    const double span = (nb - 2) * d;
+    const double eps = (xpos(sim, last) - xpos(sim, first) - span) / span;
+    const double Eeff = sigma / eps;
+    const double want = E * kn * d / (E + kn * d);
+    EXPECT_NEAR(Eeff / want, 1.0, 0.01) << "alpha " << alpha;
+    const double c0 = std::sqrt(want / 2500);
+    EXPECT_LT(std::fabs(vx(sim, tip)) * (nb * d / c0), 1e-3 * eps * nb * d) << "not at rest";
+  }
+}
+
+// A pulse travels at sqrt(E_eff / rho) and reflects from a free end with the stress sign flipped.
+TEST(Solver, WaveSpeedAndReflectionFromFreeEnd) {
+  const int nb = 300, np = 10;
+  const double d = 0.01, h = 0.01, E = 30e9, rho = 2500, alpha = 0.1;
+  const double kn = E / (alpha * d);
+  auto c = fdem_test::basic_case(2, E, 0.0, rho);
+  c.plane_stress = true;
+  c.interface_materials = {fdem_test::strong_interface(kn, kn / 2)};
+  c.fracture_material = 0;
+  c.initial_velocities = {};
+  auto mesh = fdem_test::block_bar(nb, d, h);
+  // initial velocity on the first np blocks: a pulse of amplitude v0/2 runs to the right
+  mesh.region_names = {"body", "kick"};
+  for (int e = 0; e < 2 * np; ++e) mesh.elem_region[e] = 1;
+  c.region_material["kick"] = 0;
+  const double v0 = 0.1;
+  c.initial_velocities = {InitialVelocity{"kick", {v0, 0, 0}}};
+  Simulation<2> sim(c, mesh);
+  const double ceff = std::sqrt(E * kn * d / (E + kn * d) / rho);
+  const int m1 = 100, m2 = 200;                  // monitor blocks
+  const int n1 = 4 * m1, n2 = 4 * m2;            // their bottom-left nodes
+  double t1 = -1, t2 = -1;
+  // the interface 3 pulse lengths before the right end: compression, then tension after reflection
+  const int watch = nb - 1 - 3 * 2 * np;
+  auto sep = [&]() {
+    const int a = 4 * (watch - 1) + 1, b = 4 * watch;
+    return xpos(sim, b) - xpos(sim, a);
+  };
+  double min_sep = 0, max_sep = 0, t_min = 0, t_max = 0;
+  const double t_end = (nb * d + 4 * 2 * np * d) / ceff;
+  double prev1 = 0, prev2 = 0, tprev = 0;
+  while (sim.t < t_end) {
+    sim.step();
+    const double a1 = vx(sim, n1), a2 = vx(sim, n2);
+    // front arrival: first crossing of a quarter of v0 (half the pulse amplitude), interpolated
+    if (t1 < 0 && a1 >= 0.25 * v0) t1 = tprev + (sim.t - tprev) * (0.25 * v0 - prev1) / (a1 - prev1);
+    if (t2 < 0 && a2 >= 0.25 * v0) t2 = tprev + (sim.t - tprev) * (0.25 * v0 - prev2) / (a2 - prev2);
+    prev1 = a1; prev2 = a2; tprev = sim.t;
+    const double s = sep();
+    if (s < min_sep) { min_sep = s; t_min = sim.t; }
+    if (s > max_sep) { max_sep = s; t_max = sim.t; }
+  }
+  ASSERT_GT(t1, 0);
+  ASSERT_GT(t2, t1);
+  const double speed = (m2 - m1) * d / (t2 - t1);
+  EXPECT_NEAR(speed / ceff, 1.0, 0.02) << "measured " << speed << " m/s, expected " << ceff;
+  // incident pulse compresses, reflected pulse stretches: same magnitude, later
+  EXPECT_LT(min_sep, 0.0);
+  EXPECT_GT(max_sep, 0.0);
+  EXPECT_GT(t_max, t_min);
+  EXPECT_NEAR(max_sep / -min_sep, 1.0, 0.1);
+}
+
+// Bar pulled apart quickly at both ends until interfaces fail: energy balance within 1 % of the
+// external work, without damping and with damping (damping dissipation closes it).
+// The safety factor is 0.1: the switch between the damaged tensile stiffness and the undamaged
+// compressive penalty at dn = 0 makes the central-difference scheme gain energy when omega*dt is
+// large (docs/theory.md gives the measured error against the safety factor).
+class EnergyBalance : public ::testing::TestWithParam<double> {};
+
+TEST_P(EnergyBalance, ClosesThroughDynamicFracture) {
+  const double damping = GetParam();
+  const int nb = 20;
+  const double d = 0.01, h = 0.01, E = 30e9, rho = 2500;
+  auto c = fdem_test::basic_case(2, E, 0.2, rho);
+  c.plane_stress = true;
+  InterfaceMaterial im;
+  im.kn = E / (0.1 * d);
+  im.ks = im.kn / 2.4;
+  im.ft = 3e6;
+  im.c = 6e6;
+  im.phi = 0.5;
+  im.Gnc = 50;
+  im.Gsc = 500;
+  c.interface_materials = {im};
+  c.fracture_material = 0;
+  c.local_damping = damping;
+  c.safety_factor = 0.1;
+  VelocityBC left, right;
+  left.set = "left";
+  left.active = {true, false, false};
+  left.velocity = {-0.5, 0, 0};
+  right.set = "right";
+  right.active = {true, false, false};
+  right.velocity = {0.5, 0, 0};
+  c.velocity_bcs = {left, right};
+  Simulation<2> sim(c, fdem_test::block_bar(nb, d, h));
+  double worst = 0;
+  Energies e;
+  for (int s = 1; s <= 200000; ++s) {
+    sim.step(s % 2000 == 0);
+    if (s % 2000 == 0) {
+      e = sim.energies();
+      worst = std::max(worst, std::fabs(e.balance_error) / std::max(e.work_external, 1e-30));
+    }
+  }
+  EXPECT_GE(e.failed, 1) << "no interface failed";
+  EXPECT_GT(e.fracture, 0.9 * im.Gnc * h * e.failed);
+  if (damping > 0) {
+    EXPECT_GT(e.damping, 0.01 * e.work_external);
+  }
+  EXPECT_LT(worst, 0.01) << "worst relative balance error";
+}
+
+INSTANTIATE_TEST_SUITE_P(Solver, EnergyBalance, ::testing::Values(0.0, 0.3));
+
+// 2D and 3D meshes with interfaces everywhere, pulled until they crack: balance within 1 %.
+template <int D>
+void crack_balance(HostMesh mesh, const char* pulled, const char* fixed) {
+  auto c = fdem_test::basic_case(D, 30e9, 0.2, 2500);
+  InterfaceMaterial im;
+  im.kn = 30e9 / (0.1 * 0.25);
+  im.ks = im.kn / 2.4;
+  im.ft = 2e6;
+  im.c = 4e6;
+  im.phi = 0.5;
+  im.Gnc = 20;
+  im.Gsc = 200;
+  c.interface_materials = {im};
+  c.fracture_material = 0;
+  VelocityBC a, b;
+  a.set = fixed;
+  a.active = {true, true, true};
+  b.set = pulled;
+  b.active = {true, true, true};
+  b.velocity = {0, 0, 0};
+  b.velocity[D - 1] = 1.0;
+  c.velocity_bcs = {a, b};
+  c.safety_factor = 0.1;
+  insert_interfaces(mesh, {true});
+  Simulation<D> sim(c, mesh);
+  double worst = 0;
+  Energies e;
+  for (int s = 1; s <= 30000; ++s) {
+    sim.step(s % 1000 == 0);
+    if (s % 1000 == 0) {
+      e = sim.energies();
+      worst = std::max(worst, std::fabs(e.balance_error) / std::max(e.work_external, 1e-30));
+    }
+  }
+  EXPECT_GE(e.failed, 1);
+  EXPECT_LT(worst, 0.01);
+}
+
+TEST(Solver, EnergyBalanceCrackedMesh2D) {
+  crack_balance<2>(generate_crossed_rectangle(0, 0, 1, 1, 4, 4), "top", "bottom");
+}
+TEST(Solver, EnergyBalanceCrackedMesh3D) {
+  crack_balance<3>(generate_box({0, 0, 0}, {1, 1, 1}, 2, 2, 2), "zmax", "zmin");
+}
+
+// 1e5 steps at the computed stable step stay bounded; a step far above the limit is caught by
+// the solver's own check with a clear message.
+TEST(Solver, StableStepStaysBoundedForManySteps) {
+  auto mesh = generate_crossed_rectangle(0, 0, 0.1, 0.1, 2, 2);
+  insert_interfaces(mesh, {true});
+  auto c = fdem_test::basic_case(2);
+  c.interface_materials = {fdem_test::strong_interface(33e9 / (0.1 * 0.05), 33e9 / (0.1 * 0.05) / 2.5)};
+  c.fracture_material = 0;
+  c.initial_velocities = {InitialVelocity{"all", {0.3, -0.2, 0}}};
+  Simulation<2> sim(c, mesh);
+  // a random initial velocity field excites every mode
+  auto v = Kokkos::create_mirror_view(sim.m.v);
+  unsigned seed = 7;
+  for (int i = 0; i < sim.m.nn; ++i)
+    for (int k = 0; k < 2; ++k) v(i, k) = fdem_test::prand(seed);
+  Kokkos::deep_copy(sim.m.v, v);
+  sim.reset_energy_reference();
+  sim.step(true);
+  const double e0 = sim.energies().kinetic + sim.energies().strain + sim.energies().interface_elastic;
+  double emax = 0, emin = 1e300;
+  for (int s = 1; s <= 100000; ++s) {
+    sim.step(s % 1000 == 0);
+    if (s % 1000 == 0) {
+      sim.check_stability();
+      const auto& e = sim.energies();
+      emax = std::max(emax, e.kinetic + e.strain + e.interface_elastic);
+      emin = std::min(emin, e.kinetic + e.strain + e.interface_elastic);
+    }
+  }
+  // no damping, no loads: the leap-frog's energy stays constant (it is exactly conserved for a
+  // linear system; the small nonlinearity of finite rotations is the only source of drift)
+  EXPECT_LT(emax, 1.001 * e0);
+  EXPECT_GT(emin, 0.999 * e0);
+}
+
+TEST(Solver, TimeStepAboveLimitIsDetected) {
+  auto mesh = generate_crossed_rectangle(0, 0, 0.1, 0.1, 4, 4);
+  insert_interfaces(mesh, {true});
+  auto c = fdem_test::basic_case(2);
+  c.interface_materials = {fdem_test::strong_interface(33e9 / (0.1 * 0.025), 33e9 / (0.1 * 0.025) / 2.5)};
+  c.fracture_material = 0;
+  c.initial_velocities = {InitialVelocity{"all", {0.0, -0.1, 0}}};
+  Simulation<2> sim(c, mesh);
+  sim.dt = 3.0 * sim.stable.critical;
+  bool caught = false;
+  std::string msg;
+  try {
+    for (int s = 1; s <= 20000; ++s) {
+      sim.step(s % 100 == 0);
+      if (s % 100 == 0) sim.check_stability();
+    }
+  } catch (const NumericalError& e) {
+    caught = true;
+    msg = e.what();
+  }
+  ASSERT_TRUE(caught) << "instability not detected";
+  EXPECT_NE(msg.find("step"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("time"), std::string::npos) << msg;
+  EXPECT_LT(sim.step_count, 20000);
+}
+
+}  // namespace
