@@ -1,6 +1,9 @@
 // fdem: command line front end. Exit status: 0 ok, 1 unexpected error, 2 bad input, 3 numerical
 // failure (instability, non-finite state).
+#include <unistd.h>
+
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -41,6 +44,15 @@ void print_info() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // OpenMP reads its binding settings when the program loads: if the user set none, start again
+  // once with threads spread over the cores (what Kokkos recommends), else Kokkos warns and
+  // threads may migrate.
+  if (!std::getenv("OMP_PROC_BIND") && !std::getenv("FDEM_NO_REEXEC")) {
+    setenv("OMP_PROC_BIND", "spread", 1);
+    setenv("OMP_PLACES", "threads", 1);
+    setenv("FDEM_NO_REEXEC", "1", 1);
+    execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
+  }
   CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);

@@ -168,6 +168,10 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
       stable.bulk_element = e;
     }
   }
+  double volume = 0, emin = std::numeric_limits<double>::infinity();
+  for (int e = 0; e < ne; ++e) volume += vol_h(e);
+  for (const auto& bm : c.materials) emin = std::min(emin, bm.E);
+  energy_floor_ = 0.5 * emin * 1e-12 * volume;
   Kokkos::deep_copy(m.elem, elem_h);
   Kokkos::deep_copy(m.grad, grad_h);
   Kokkos::deep_copy(m.vol0, vol_h);
@@ -444,7 +448,8 @@ void Simulation<D>::step(bool sample) {
       have_reference_ = true;
     }
     e.balance_error = now - e.work_external - reference_;
-    e.scale = std::max({std::fabs(now), std::fabs(reference_) + std::fabs(e.work_external), 1e-300});
+    e.scale = std::max({std::fabs(now), std::fabs(reference_) + std::fabs(e.work_external),
+                        energy_floor_, 1e-300});
     energies_ = e;
   }
   work_damping_ += w.v[0];

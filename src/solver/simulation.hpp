@@ -77,6 +77,7 @@ class Simulation {
   double work_damping_ = 0, work_bc_ = 0;
   double reference_ = 0;  // energy minus external work at the reference step
   bool have_reference_ = false;
+  double energy_floor_ = 0;  // energies below this are round-off (strain energy at strain 1e-6)
   Energies energies_;
   std::vector<std::string> platen_names_, bc_names_;
   std::vector<Kokkos::View<int*>> bc_nodes_;
