@@ -142,20 +142,20 @@ TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
 
   EXPECT_DOUBLE_EQ(c.local_damping, 0.7);
   EXPECT_DOUBLE_EQ(c.mass_damping, 0.0);
-  // Platens close by 0.4 mm at 2 x 0.05 m/s.
-  EXPECT_NEAR(c.end_time, 4e-3, 1e-15);
-  EXPECT_NEAR((top.velocity[1] - bot.velocity[1]) * c.end_time, -0.4e-3, 1e-15);
+  // Platens close by 0.8 mm at 2 x 0.05 m/s.
+  EXPECT_NEAR(c.end_time, 8e-3, 1e-15);
+  EXPECT_NEAR((top.velocity[1] - bot.velocity[1]) * c.end_time, -0.8e-3, 1e-15);
   EXPECT_EQ(c.stop_platen, "top");
   EXPECT_DOUBLE_EQ(c.stop_drop_fraction, 0.7);
-  EXPECT_NEAR(c.history_interval, 4e-3 / 400, 1e-18);
-  EXPECT_NEAR(c.snapshot_interval, 4e-3 / 8, 1e-18);
+  EXPECT_NEAR(c.history_interval, 8e-3 / 400, 1e-18);
+  EXPECT_NEAR(c.snapshot_interval, 8e-3 / 8, 1e-18);
   EXPECT_DOUBLE_EQ(c.safety_factor, 0.5);
   EXPECT_TRUE(c.velocity_bcs.empty());
 
   // resolved: expressions evaluated, defaults filled in
   ASSERT_TRUE(c.resolved.is_object());
   EXPECT_TRUE(c.resolved["time"]["end_time"].is_number());
-  EXPECT_NEAR(c.resolved["time"]["end_time"].get<double>(), 4e-3, 1e-15);
+  EXPECT_NEAR(c.resolved["time"]["end_time"].get<double>(), 8e-3, 1e-15);
   EXPECT_EQ(c.resolved["time"]["max_steps"], 0);
   EXPECT_EQ(c.resolved["time"]["dt"], 0.0);
   EXPECT_EQ(c.resolved["boundary"]["gravity"], json::array({0.0, 0.0}));
@@ -165,8 +165,8 @@ TEST(CaseExamples, BrazilianDiscRateIsOneOverride) {
   Case c = fdem::load_case(kDisc, {"parameters.rate=0.001"});  // the paper's 1 mm/s
   EXPECT_DOUBLE_EQ(c.platens[0].velocity[1], -0.001);
   EXPECT_DOUBLE_EQ(c.platens[1].velocity[1], 0.001);
-  EXPECT_NEAR(c.end_time, 0.2, 1e-12);
-  EXPECT_NEAR(c.history_interval, 0.2 / 400, 1e-15);
+  EXPECT_NEAR(c.end_time, 0.4, 1e-12);
+  EXPECT_NEAR(c.history_interval, 0.4 / 400, 1e-15);
 }
 
 TEST(CaseExamples, BarParses) {
