@@ -1,0 +1,121 @@
+// End to end through the real command line: a small case runs, and what it wrote (history.csv,
+// summary.json, snapshots.h5/.xdmf) is read back and checked; `fdem check` accepts a good case and
+// rejects a bad one with exit status 2.
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+int run(const std::string& cmd) {
+  const int rc = std::system(cmd.c_str());
+  return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+std::string tmpdir(const std::string& name) {
+  const auto d = fs::temp_directory_path() / ("fdem_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d.string();
+}
+
+const std::string kBar = std::string(FDEM_TEST_DATA) + "/cases/bar.json";
+
+TEST(Cli, RunWritesHistorySummaryAndSnapshots) {
+  const std::string out = tmpdir("bar");
+  const std::string cmd = std::string(FDEM_BINARY) + " run " + kBar + " --out " + out +
+                          " --quiet --set output.snapshot_count=4 > " + out + ".log 2>&1";
+  ASSERT_EQ(run(cmd), 0) << slurp(out + ".log");
+
+  // summary: counts of a 10 x 1 crossed rectangle with interfaces everywhere
+  const auto s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  EXPECT_EQ(s["counts"]["elements"], 40);
+  EXPECT_EQ(s["counts"]["nodes"], 120);
+  EXPECT_EQ(s["counts"]["interfaces"], 4 * 10 + 10 * 0 + 1 * 9);
+  EXPECT_GT(s["steps"].get<long>(), 100);
+  EXPECT_NEAR(s["end_time_s"].get<double>(), 2e-3, 1e-5);
+  EXPECT_GT(s["time_step"]["dt_s"].get<double>(), 0.0);
+  EXPECT_LE(s["time_step"]["dt_s"].get<double>(), 0.5 * s["time_step"]["dt_critical_s"].get<double>() * (1 + 1e-12));
+
+  // history: header with units, about 100 rows, time increasing, energy balance small
+  std::ifstream h(out + "/history.csv");
+  std::string header, line;
+  std::getline(h, header);
+  EXPECT_NE(header.find("time [s]"), std::string::npos);
+  EXPECT_NE(header.find("right_reaction_x [N]"), std::string::npos);
+  EXPECT_NE(header.find("energy_error [J]"), std::string::npos);
+  int rows = 0;
+  double tprev = -1, tlast = 0, werr = 0, wext = 0;
+  while (std::getline(h, line)) {
+    std::vector<double> v;
+    std::stringstream ls(line);
+    std::string cell;
+    while (std::getline(ls, cell, ',')) v.push_back(std::stod(cell));
+    ASSERT_GE(v.size(), 10u);
+    EXPECT_GT(v[0], tprev);
+    tprev = tlast = v[0];
+    werr = v[v.size() - 3];
+    wext = v[v.size() - 4];
+    ++rows;
+  }
+  EXPECT_GE(rows, 95);
+  EXPECT_LE(rows, 105);
+  EXPECT_NEAR(tlast, 2e-3, 5e-5);
+  EXPECT_GT(wext, 0.0);
+  EXPECT_LT(std::fabs(werr), 0.01 * wext);
+
+  // snapshots: the checker script validates every XDMF reference against the HDF5 file
+  ASSERT_TRUE(fs::exists(out + "/snapshots.xdmf"));
+  ASSERT_TRUE(fs::exists(out + "/snapshots.h5"));
+  if (run("/usr/bin/python3 -c 'import h5py' > /dev/null 2>&1") == 0) {
+    EXPECT_EQ(run("/usr/bin/python3 " + std::string(FDEM_SOURCE_DIR) + "/scripts/check_snapshots.py " + out +
+                  " > " + out + ".check 2>&1"), 0)
+        << slurp(out + ".check");
+  }
+  fs::remove_all(out);
+}
+
+TEST(Cli, CheckAcceptsGoodCaseAndRejectsBadOne) {
+  const std::string dir = tmpdir("check");
+  fs::create_directories(dir);
+  EXPECT_EQ(run(std::string(FDEM_BINARY) + " check " + kBar + " > " + dir + "/ok.log 2>&1"), 0);
+  EXPECT_NE(slurp(dir + "/ok.log").find("case OK"), std::string::npos);
+  // nu = 0.5 is out of range: exit 2 and a message naming the file, the key and the range
+  EXPECT_EQ(run(std::string(FDEM_BINARY) + " check " + kBar +
+                " --set materials.concrete.nu=0.5 > " + dir + "/bad.log 2>&1"), 2);
+  const std::string msg = slurp(dir + "/bad.log");
+  EXPECT_NE(msg.find("bar.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("materials.concrete.nu"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("0.5"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
+
+TEST(Cli, UnstableRunStopsWithExitStatus3) {
+  const std::string out = tmpdir("unstable");
+  // far above the stable step: the solver's own check must stop it
+  const int rc = run(std::string(FDEM_BINARY) + " run " + kBar + " --out " + out +
+                     " --quiet --set time.safety_factor=2 --set damping.local=0 > " + out + ".log 2>&1");
+  EXPECT_EQ(rc, 3) << slurp(out + ".log");
+  EXPECT_NE(slurp(out + ".log").find("step"), std::string::npos);
+  fs::remove_all(out);
+}
+
+}  // namespace
