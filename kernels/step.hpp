@@ -428,6 +428,22 @@ void node_list_force(const Model<D>& m, const Kokkos::View<int*>& nodes, double 
   for (int k = 0; k < 3; ++k) out[k] = s.v[k];
 }
 
+// Mean displacement of a node list (monitors: crack mouth opening, deflections).
+template <int D>
+void node_list_displacement(const Model<D>& m, const Kokkos::View<int*>& nodes, double (&out)[3]) {
+  auto x = m.x;
+  auto X = m.X;
+  SumN<3> s;
+  Kokkos::parallel_reduce(
+      "fdem::node_list_displacement", Kokkos::RangePolicy<ExecSpace>(0, nodes.extent(0)),
+      KOKKOS_LAMBDA(const int j, SumN<3>& a) {
+        for (int k = 0; k < D; ++k) a.v[k] += x(nodes(j), k) - X(nodes(j), k);
+      },
+      s);
+  const double n = nodes.extent(0) > 0 ? static_cast<double>(nodes.extent(0)) : 1.0;
+  for (int k = 0; k < 3; ++k) out[k] = s.v[k] / n;
+}
+
 // Per-element Cauchy stress (6 components) and per-interface mean damage, for snapshots.
 template <int D>
 void element_stress(const Model<D>& m, const Kokkos::View<double* [6]>& out) {

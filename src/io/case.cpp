@@ -978,7 +978,11 @@ void read_time(json& doc, Case& c, const Reader& R) {
 void read_output(json& doc, Case& c, const Reader& R) {
   json& o = R.object(doc, "", "output", false);
   const std::string P = "output";
-  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count"});
+  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors"});
+  if (o.contains("monitors")) {
+    json& arr = R.array(o, P, "monitors", false);
+    for (size_t i = 0; i < arr.size(); ++i) c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
+  }
   if (o.contains("history_interval") && o.contains("history_rows"))
     R.fail(P, "give either 'history_interval' or 'history_rows', not both");
   if (o.contains("snapshot_interval") && o.contains("snapshot_count"))
@@ -1123,6 +1127,7 @@ void check_case_against_mesh(const Case& c, const HostMesh& mesh) {
   }
   for (size_t i = 0; i < c.point_loads.size(); ++i)
     check_set(c.point_loads[i].set, child(child("boundary.point_loads", i), "set"));
+  for (size_t i = 0; i < c.monitors.size(); ++i) check_set(c.monitors[i], child("output.monitors", i));
 }
 
 }  // namespace fdem

@@ -114,6 +114,16 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   }
   for (const auto& name : sim.bc_names())
     for (int k = 0; k < D; ++k) cols.push_back(name + "_reaction_" + axes[k] + " [N]");
+  std::vector<Kokkos::View<int*>> monitor_nodes;
+  for (const auto& name : c.monitors) {
+    const auto& nodes = mesh.node_sets.at(name);
+    Kokkos::View<int*> v("fdem::monitor", nodes.size());
+    auto vh = Kokkos::create_mirror_view(v);
+    for (size_t j = 0; j < nodes.size(); ++j) vh(j) = nodes[j];
+    Kokkos::deep_copy(v, vh);
+    monitor_nodes.push_back(v);
+    for (int k = 0; k < D; ++k) cols.push_back(name + "_u" + axes[k] + " [m]");
+  }
   for (const char* e : {"E_kinetic [J]", "E_strain [J]", "E_interface [J]", "E_contact [J]",
                         "D_fracture [J]", "D_damping [J]", "D_friction [J]", "W_external [J]",
                         "energy_error [J]", "interfaces_damaged", "interfaces_failed"})
@@ -169,6 +179,11 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     }
     for (const auto& r : sim.reactions())
       for (int k = 0; k < D; ++k) row.push_back(r[k]);
+    for (const auto& nodes : monitor_nodes) {
+      double u[3];
+      node_list_displacement<D>(sim.m, nodes, u);
+      for (int k = 0; k < D; ++k) row.push_back(u[k]);
+    }
     for (double e : {last.kinetic, last.strain, last.interface_elastic, last.contact_elastic,
                      last.fracture, last.damping, last.friction, last.work_external,
                      last.balance_error, static_cast<double>(last.damaged),
