@@ -832,7 +832,15 @@ void read_interfaces(json& doc, Case& c, const Reader& R) {
   }
   if (!doc.contains("fracture")) return;
   json& f = R.object(doc, "", "fracture", false);
-  R.keys(f, "fracture", {"regions", "interface_material"});
+  R.keys(f, "fracture", {"regions", "interface_material", "strength_reduction"});
+  if (f.contains("strength_reduction")) {
+    json& sr = R.object(f, "fracture", "strength_reduction", false);
+    const std::string sp = "fracture.strength_reduction";
+    R.keys(sr, sp, {"initial", "start_time", "rate"});
+    c.srf_initial = R.number(sr, sp, "initial", gt(0), 1.0);
+    c.srf_start = R.number(sr, sp, "start_time", ge(0), 0.0);
+    c.srf_rate = R.number(sr, sp, "rate", ge(0), 0.0);
+  }
   json& regs = R.array(f, "fracture", "regions", true);
   if (regs.empty()) R.fail("fracture.regions", "at least one region is needed (omit 'fracture' for no fracture)");
   std::vector<std::string> known;

@@ -73,6 +73,9 @@ struct Case {
   std::vector<InterfaceMaterial> interface_materials;
   std::vector<std::string> fracturable_regions;  // region names that get interfaces
   int fracture_material = -1;                    // index into interface_materials
+  // Strength reduction of the interfaces (slope stability): f_t, c and tan(phi) are divided by
+  // SRF(t) = srf_initial for t < srf_start, srf_initial + srf_rate (t - srf_start) after.
+  double srf_initial = 1.0, srf_start = 0.0, srf_rate = 0.0;
 
   std::vector<VelocityBC> velocity_bcs;
   std::vector<PointLoad> point_loads;

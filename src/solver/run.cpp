@@ -124,6 +124,11 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     monitor_nodes.push_back(v);
     for (int k = 0; k < D; ++k) cols.push_back(name + "_u" + axes[k] + " [m]");
   }
+  const bool srf = c.srf_initial != 1.0 || c.srf_rate > 0;
+  auto srf_at = [&](double t) {
+    return c.srf_initial + c.srf_rate * std::max(0.0, t - c.srf_start);
+  };
+  if (srf) cols.push_back("strength_reduction_factor");
   for (const char* e : {"E_kinetic [J]", "E_strain [J]", "E_interface [J]", "E_contact [J]",
                         "D_fracture [J]", "D_damping [J]", "D_friction [J]", "W_external [J]",
                         "energy_error [J]", "interfaces_damaged", "interfaces_failed"})
@@ -184,6 +189,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
       node_list_displacement<D>(sim.m, nodes, u);
       for (int k = 0; k < D; ++k) row.push_back(u[k]);
     }
+    if (srf) row.push_back(srf_at(last.time));
     for (double e : {last.kinetic, last.strain, last.interface_elastic, last.contact_elastic,
                      last.fracture, last.damping, last.friction, last.work_external,
                      last.balance_error, static_cast<double>(last.damaged),
@@ -216,6 +222,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     const bool hist = sim.t >= next_hist * (1 - 1e-12);
     const bool chk = c.check_interval > 0 && (sim.step_count + 1) % c.check_interval == 0;
     sim.set_sample_reactions(hist);
+    if (srf) sim.set_strength_reduction(srf_at(sim.t));
     sim.step(hist || chk);
     if (hist || chk) check();
     last_was_row = hist;

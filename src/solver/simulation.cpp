@@ -189,6 +189,7 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
     if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
     const auto& im = c.interface_materials[c.fracture_material];
     m.coh = CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta};
+    coh0_ = m.coh;
     auto if_h = mirror(m.iface);
     auto ia_h = mirror(m.iarea);
     const double kmax = std::max(im.kn, im.ks);

@@ -67,11 +67,19 @@ class Simulation {
   void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                 std::vector<double>& stress, std::vector<double>& damage);
 
+  // Divides the interface strengths f_t, c and tan(phi) of the case by `factor` (>= 0).
+  void set_strength_reduction(double factor) {
+    m.coh.ft = coh0_.ft / factor;
+    m.coh.c = coh0_.c / factor;
+    m.coh.tanphi = coh0_.tanphi / factor;
+  }
+
   const std::vector<std::string>& platen_names() const { return platen_names_; }
   const std::vector<std::string>& bc_names() const { return bc_names_; }
 
  private:
   ForceScatter<D> scatter_;
+  CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   NodeUpdateParams prm_{};
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
