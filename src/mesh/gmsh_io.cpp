@@ -17,6 +17,7 @@
 #include "common/error.hpp"
 #include "mesh/mesh.hpp"
 #include "mesh/mesh_internal.hpp"
+#include "mesh/msh_check.hpp"
 
 namespace fdem {
 
@@ -323,10 +324,22 @@ HostMesh read_gmsh(const std::string& path, int dim) {
       throw InputError(path + ": mesh file not found");
     if (std::filesystem::is_directory(path, ec))
       throw InputError(path + ": is a directory, not a mesh file");
+    if (!std::filesystem::is_regular_file(path, ec))
+      throw InputError(path + ": is not a regular file");
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw InputError(path + ": mesh file cannot be opened for reading");
   }
-  const bool geo = lower_ext(path) == ".geo";
+  const std::string ext = lower_ext(path);
+  const bool geo = ext == ".geo";
+  // Gmsh picks a reader by extension and, for unknown ones, by the first line: anything that
+  // does not start like a .msh file is run as a .geo script. Only .msh and .geo are accepted, and
+  // a .msh file is checked first (Gmsh 4.8 crashes on malformed .msh files; see msh_check.hpp).
+  // A .geo file is a script (it can include files and run commands): trust it like code.
+  if (!geo && ext != ".msh")
+    throw InputError(path + ": unsupported mesh file type " +
+                     (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
+                     " (fdem reads Gmsh .msh files, format 2.2 or 4.1, and .geo files)");
+  if (!geo) check_msh_structure(path);
   Extracted ex;
   {
     GmshSession session;

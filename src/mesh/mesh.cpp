@@ -96,6 +96,11 @@ void check_elements_impl(const HostMesh& mesh, const std::string& source,
     meas[e] = signed_measure(mesh, e);
     mean += std::abs(meas[e]);
   }
+  // Finite coordinates can still overflow (|x| ~ 1e200): NaN or infinite areas would pass the
+  // test below.
+  if (!std::isfinite(mean))
+    throw InputError(source + ": element " + (dim == 2 ? "areas" : "volumes") +
+                     " overflow (node coordinates are too large)");
   mean /= ne;
   const double tol = 1e-12 * mean;
   const char* what = dim == 2 ? "area" : "volume";
