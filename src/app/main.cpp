@@ -99,7 +99,11 @@ int main(int argc, char** argv) {
       fdem::run_case(case_path, opt);
     }
   } catch (const fdem::InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    // Name the case file in every message (mesh generator errors, for one, do not).
+    std::string msg = e.what();
+    if (!case_path.empty() && msg.find(case_path) == std::string::npos)
+      msg = case_path + ": " + msg;
+    std::cerr << "error: " << msg << "\n";
     return 2;
   } catch (const fdem::NumericalError& e) {
     std::cerr << "numerical failure: " << e.what() << "\n";

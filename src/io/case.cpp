@@ -245,7 +245,8 @@ class Reader {
                       : ">= " + std::to_string(lo) +
                             (hi == std::numeric_limits<long>::max() ? std::string()
                                                                     : " and <= " + std::to_string(hi));
-    if (x < static_cast<double>(lo) || x > static_cast<double>(hi))
+    // static_cast<double>(LONG_MAX) rounds up to 2^63, which does not fit in a long.
+    if (x < static_cast<double>(lo) || x > static_cast<double>(hi) || x >= 0x1p63)
       fail(p, "value " + fmt_num(x) + " is out of range (allowed: integer " + allowed + ")");
     return static_cast<long>(x);
   }
@@ -360,6 +361,33 @@ class Reader {
  private:
   std::string src_;
 };
+
+// ---------------------------------------------------------------------------------------------
+// Nesting depth: the walks over the document below are recursive, so a hostile file such as
+// [[[[...]]]] nested 100000 deep would overflow the stack. Case files nest 4 or 5 levels.
+
+constexpr size_t kMaxDepth = 64;
+
+// Iterative (no recursion): the depth of `j`, counting containers; stops above kMaxDepth.
+size_t json_depth(const json& j) {
+  std::vector<std::pair<const json*, size_t>> stack{{&j, 1}};
+  size_t depth = 0;
+  while (!stack.empty()) {
+    auto [v, d] = stack.back();
+    stack.pop_back();
+    if (!v->is_structured()) continue;
+    depth = std::max(depth, d);
+    if (depth > kMaxDepth) break;
+    for (const auto& e : *v) stack.push_back({&e, d + 1});
+  }
+  return depth;
+}
+
+void check_depth(const json& j, const std::string& src, const std::string& what) {
+  if (json_depth(j) > kMaxDepth)
+    throw InputError(src + ": " + what + " nests objects/arrays more than " +
+                     std::to_string(kMaxDepth) + " levels deep");
+}
 
 // ---------------------------------------------------------------------------------------------
 // JSON text -> document (syntax errors with line/column, duplicate keys rejected)
@@ -484,6 +512,8 @@ void apply_override(json& doc, const std::string& ov, const Reader& R) {
     value = text;
   }
 
+  check_depth(value, R.src(), where + ": the value");
+
   json* cur = &doc;
   std::string path;
   for (size_t i = 0; i < segs.size(); ++i) {
@@ -492,7 +522,7 @@ void apply_override(json& doc, const std::string& ov, const Reader& R) {
     const std::string here = child(path, seg);
     if (cur->is_object()) {
       if (last) {
-        (*cur)[seg] = value;
+        (*cur)[seg] = std::move(value);
         return;
       }
       auto it = cur->find(seg);
@@ -520,7 +550,7 @@ void apply_override(json& doc, const std::string& ov, const Reader& R) {
                          " does not exist (allowed: 0 to " +
                          std::to_string(cur->empty() ? 0 : cur->size() - 1) + ")");
       if (last) {
-        (*cur)[idx] = value;
+        (*cur)[idx] = std::move(value);
         return;
       }
       cur = &(*cur)[idx];
@@ -555,7 +585,8 @@ class Expr {
   [[noreturn]] void error(const std::string& why) const {
     std::vector<std::string> names;
     for (const auto& kv : params_) names.push_back(kv.first);
-    R_.fail(path_, "expression '" + s_ + "': " + why + " (expressions use numbers, parameters (" +
+    const std::string shown = s_.size() > 80 ? s_.substr(0, 77) + "..." : s_;
+    R_.fail(path_, "expression '" + shown + "': " + why + " (expressions use numbers, parameters (" +
                        (names.empty() ? std::string("none defined") : join(names)) +
                        "), pi, + - * / and parentheses)");
   }
@@ -592,17 +623,27 @@ class Expr {
     skip();
     if (pos_ < s_.size() && (s_[pos_] == '-' || s_[pos_] == '+')) {
       char op = s_[pos_++];
+      Nest nest(*this);
       double v = unary();
       return op == '-' ? -v : v;
     }
     return primary();
   }
+  // Recursion guard: "=((((...1...))))" or "=------1" nested without limit would overflow the stack.
+  struct Nest {
+    explicit Nest(Expr& e) : e_(e) {
+      if (++e_.depth_ > 100) e_.error("nested more than 100 levels deep");
+    }
+    ~Nest() { --e_.depth_; }
+    Expr& e_;
+  };
   double primary() {
     skip();
     if (pos_ >= s_.size()) error("unexpected end");
     char ch = s_[pos_];
     if (ch == '(') {
       ++pos_;
+      Nest nest(*this);
       double v = sum();
       skip();
       if (pos_ >= s_.size() || s_[pos_] != ')') error("missing ')'");
@@ -638,6 +679,7 @@ class Expr {
   const Reader& R_;
   std::string path_;
   size_t pos_ = 0;
+  int depth_ = 0;
 };
 
 void substitute(json& j, const std::string& path, const std::map<std::string, double>& params,
@@ -1013,6 +1055,7 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
                 const fs::path& base_dir, bool check_files) {
   Reader R(source);
   if (!doc.is_object()) R.fail("", "a case file must hold one JSON object {...}, got " + describe(doc));
+  check_depth(doc, source, "the case");
   for (const auto& ov : overrides) apply_override(doc, ov, R);
   strip_nulls(doc);
 
@@ -1063,6 +1106,12 @@ Case load_case(const std::string& path, const std::vector<std::string>& override
   if (!fs::exists(path, ec)) throw InputError(path + ": case file does not exist");
   if (fs::is_directory(path, ec))
     throw InputError(path + ": is a folder, not a case file (give the .json file)");
+  // Not a device or pipe (/dev/zero would be read for ever); case files are small.
+  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": is not a regular file");
+  const auto size = fs::file_size(path, ec);
+  if (!ec && size > (64u << 20))
+    throw InputError(path + ": case file is too large (" + std::to_string(size >> 20) +
+                     " MiB; a case file is a few kB of JSON)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open the case file for reading");
   std::stringstream ss;
