@@ -52,12 +52,24 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
       const double ratio = GT > 0.0 ? GS / GT : 0.0;
       const double gc = p.Gnc + (p.Gsc - p.Gnc) * kmath::pow(ratio, p.eta);
       const double keff = 2.0 * GT / (dm * dm);
-      double dmf = 2.0 * gc / (keff * dm);
-      if (dmf < dm * (1.0 + 1e-12)) dmf = dm * (1.0 + 1e-12);  // brittle limit: fails at once
-      s.dm0 = dm;
+      // Initiation is placed on the envelope: the fraction r <= 1 of the present separation at
+      // which the criterion is met with equality (along the present direction). A step that
+      // overshoots the strength, or a strength reduced while the separation stays (slope
+      // stability), then softens at once to the envelope instead of keeping the excess traction.
+      double r = 1.0;
+      if (tensile) r = kmin(r, p.ft / tn_e);
+      if (shear) {
+        const double den = ts_e - sigc * p.tanphi;
+        r = kmin(r, den > 0.0 ? p.c / den : 1.0);
+      }
+      r = kmax(r, 1e-6);
+      const double dm0 = r * dm;
+      double dmf = 2.0 * gc / (keff * dm0);
+      if (dmf < dm0 * (1.0 + 1e-12)) dmf = dm0 * (1.0 + 1e-12);  // brittle limit: fails at once
+      s.dm0 = dm0;
       s.dmf = dmf;
       s.dmax = dm;
-      s.wd = 0.0;
+      s.wd = 0.5 * keff * dmf * dm0 / (dmf - dm0) * (kmin(dm, dmf) - dm0);
     }
   } else if (dm > s.dmax) {
     // Dissipation = integral of psi0 dD with psi0 = K dm^2 / 2 the undamaged energy of the

@@ -162,3 +162,29 @@ TEST(Cohesive, UnloadingFollowsDamagedSecantAndReloadingDoesNotHeal) {
 }
 
 }  // namespace
+
+namespace {
+
+// A strength lowered while the separation stays (strength reduction in slope stability), or a
+// step that overshoots the strength: the point initiates on the envelope and softens at once, so
+// the traction never exceeds the present strength.
+TEST(Cohesive, InitiationLiesOnTheEnvelopeWhenTheStrengthDrops) {
+  auto p = table1();
+  const double d = 0.9 * p.ft / p.kn;  // elastic at the original strength
+  CohesivePoint h{0, 0, 0, 0};
+  double tn, kss, D;
+  fdem::cohesive_update(p, d, 0.0, h, tn, kss, D);
+  EXPECT_DOUBLE_EQ(D, 0.0);
+  EXPECT_NEAR(tn, 0.9 * p.ft, 1e-6 * p.ft);
+  p.ft *= 0.5;  // strength halved at the same separation
+  fdem::cohesive_update(p, d, 0.0, h, tn, kss, D);
+  const double dm0 = p.ft / p.kn, dmf = 2 * p.Gnc / p.ft;
+  EXPECT_NEAR(h.dm0, dm0, 1e-9 * dm0);
+  EXPECT_NEAR(tn, p.ft * (dmf - d) / (dmf - dm0), 1e-9 * p.ft);  // on the softening line
+  EXPECT_LE(tn, p.ft);
+  EXPECT_GT(D, 0.0);
+  // the energy dissipated so far is the area between the envelope and the secant
+  EXPECT_NEAR(fdem::cohesive_dissipation(h), p.Gnc * (d - dm0) / (dmf - dm0), 1e-9 * p.Gnc);
+}
+
+}  // namespace
