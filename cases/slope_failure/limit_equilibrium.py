@@ -28,7 +28,8 @@ def geo_value(name):
     return v * math.pi / 180 if m.group(2) else v
 
 
-H, toe, face, weak = geo_value("H"), geo_value("toe"), geo_value("face"), geo_value("weak")
+H, toe, hd = geo_value("H"), geo_value("toe"), geo_value("hd")
+face, weak = geo_value("face"), geo_value("weak")
 with open(case_path) as f:
     case = json.load(f)
 rho = case["materials"]["rock"]["density"]
@@ -36,11 +37,12 @@ g = abs(case["boundary"]["gravity"][1])
 im = case["interface_materials"]["weathered_if"]
 c, phi = im["c"], math.radians(im["phi_deg"])
 
-xf = toe + H / math.tan(face)
-xw = toe + H / math.tan(weak)
-area = 0.5 * H * (xw - xf)           # triangle (toe, crest of face, end of weak plane)
+xf = toe + H / math.tan(face)        # crest of the face
+xd = toe + hd / math.tan(face)       # daylight point of the weak plane on the face
+xw = xd + (H - hd) / math.tan(weak)  # end of the weak plane on the top surface
+area = 0.5 * (H - hd) * (xw - xf)    # triangle (daylight point, crest, end of weak plane)
 W = rho * g * area
-L = math.hypot(xw - toe, H)
+L = math.hypot(xw - xd, H - hd)
 FS = (c * L + W * math.cos(weak) * math.tan(phi)) / (W * math.sin(weak))
 print("wedge area %.2f m^2, weight %.4g N/m, base length %.2f m, base angle %.1f deg" % (area, W, L, math.degrees(weak)))
 print("c = %.4g Pa, phi = %.1f deg" % (c, math.degrees(phi)))
