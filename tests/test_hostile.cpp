@@ -169,6 +169,14 @@ TEST(HostileFiles, HostileOverrides) {
                          "time.max_steps=9223372036854775808", "platens.99999999999999999999=1",
                          "materials.concrete.E=\"=1/0\"", "dimension=[]", "=", "a..b=1"})
     expect_input_error(run_fdem({"check", bar, "--set", ov}), "bar.json");
+  // A --set value that is not UTF-8 cannot be written into the resolved case.json (this made
+  // 'fdem run' fail with an unexpected json type_error, exit 1).
+  const fs::path out = fs::path(::testing::TempDir()) / ("fdem_hostile_out_" + std::to_string(::getpid()));
+  expect_input_error(run_fdem({"run", bar, "--quiet", "--out", out.string(), "--set",
+                               "description=\xff\xfe"}),
+                     "bar.json");
+  std::error_code ec;
+  fs::remove_all(out, ec);
 }
 
 // `fdem run` with an output folder that cannot be created.

@@ -479,6 +479,12 @@ json parse_text(const std::string& text, const std::string& src) {
 // --set overrides
 
 void apply_override(json& doc, const std::string& ov, const Reader& R) {
+  // The resolved case is written out as JSON, which must be UTF-8 (a case file is, as parsed).
+  try {
+    (void)json(ov).dump();
+  } catch (const json::exception&) {
+    throw InputError(R.src() + ": --set: the override is not valid UTF-8 text");
+  }
   const std::string where = "--set '" + ov + "'";
   const size_t eq = ov.find('=');
   if (eq == std::string::npos)
