@@ -257,8 +257,9 @@ struct NodeUpdateParams {
 
 // Sums of one node update: energy dissipated by damping and work of the velocity BCs over this
 // step (0, 1); on sampled steps also the kinetic energy 0.5 m v(n-1/2).v(n+1/2) (the leap-frog's
-// conserved form) (2), and the work of gravity (3) and of the point loads (4) at x(n).
-using NodeSums = SumN<5>;
+// conserved form) (2), the work of gravity (3) and of the point loads (4) at x(n), and the linear
+// momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (5, 6, 7; components beyond D stay 0).
+using NodeSums = SumN<8>;
 
 // Central-difference update of all nodes with damping and velocity BCs; zeroes the force for the
 // next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
@@ -305,6 +306,7 @@ NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
             s.v[2] += 0.5 * mi * vo * vn;
             s.v[3] += mi * p.gravity[k] * u;
             s.v[4] += fe * u;
+            s.v[5 + k] += 0.5 * mi * (vo + vn);
           }
           v(i, k) = vn;
           x(i, k) += p.dt * vn;

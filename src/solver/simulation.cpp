@@ -439,6 +439,7 @@ void Simulation<D>::step(bool sample) {
       e.friction += platen_acc_host_(p, 4);
     }
     e.kinetic = w.v[2];
+    for (int k = 0; k < 3; ++k) e.momentum[k] = w.v[5 + k];
     e.damping = work_damping_ + 0.5 * w.v[0];
     e.work_external = wp + work_bc_ + 0.5 * w.v[1] + w.v[3] + w.v[4];
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
