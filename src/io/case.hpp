@@ -95,6 +95,7 @@ struct Case {
   double history_interval = 0;   // s; 0: 200 rows over the run
   double snapshot_interval = 0;  // s; 0: no snapshots
   int check_interval = 100;      // steps between stability checks (energy balance, finiteness)
+  bool output_fragments = true;  // fragments.csv and the snapshot field (runs with interfaces only)
 
   nlohmann::json resolved;       // the case after --set overrides and defaults, written to out/
 };
