@@ -225,6 +225,71 @@ TEST(Impact, MomentumConservedInFreeFlightOfFragments3D) {
   free_flight<3>(kCase3D, {"parameters.h=0.008"});
 }
 
+// A failed interface between two blocks: pressed together by 1 um it pushes them apart (the
+// penalty); once a pair is farther apart than half the face (here: the right block turned over by
+// 180 degrees about the interface's centre, which makes the mid-surface degenerate) it carries
+// no force and stores no energy, where it used to give non-finite forces, and it stays so when
+// the faces come back (switching on again would release the overlap reached meanwhile).
+TEST(Impact, PartedFailedInterfaceCarriesNothing) {
+  auto c = fdem_test::basic_case(2);
+  c.interface_materials = {fdem_test::strong_interface(1e13, 4e12)};
+  c.fracture_material = 0;
+  const double d = 0.01;
+  Simulation<2> sim(c, fdem_test::block_bar(2, d, d));
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  for (int k = 0; k < 2; ++k) {
+    h(0, k, 0) = 3e-6;
+    h(0, k, 1) = 1e-6;
+    h(0, k, 2) = 2e-6;
+    h(0, k, 3) = 0;
+  }
+  Kokkos::deep_copy(sim.m.ihist, h);
+  auto x = Kokkos::create_mirror_view(sim.m.x);
+  auto forces = [&](double (&fB)[2], double& stored) {
+    Kokkos::deep_copy(sim.m.x, x);
+    Kokkos::deep_copy(sim.m.f, 0.0);
+    ForceScatter<2> sf(sim.m.f);
+    compute_forces<2>(sim.m, sf);
+    auto f = Kokkos::create_mirror_view(sim.m.f);
+    Kokkos::deep_copy(f, sim.m.f);
+    fB[0] = fB[1] = 0;
+    for (int i = 4; i < 8; ++i)
+      for (int k = 0; k < 2; ++k) fB[k] += f(i, k);  // total force on the right block
+    stored = interface_state<2>(sim.m).v[0];
+  };
+  Kokkos::deep_copy(x, sim.m.X);
+  for (int i = 4; i < 8; ++i) x(i, 0) -= 1e-6;  // right block pressed 1 um into the left one
+  double f[2], e;
+  forces(f, e);
+  EXPECT_NEAR(f[0], 1e13 * 1e-6 * d, 1e-9 * 1e13 * 1e-6 * d);  // kn * overlap * face area (t = 1)
+  EXPECT_NEAR(f[1], 0.0, 1e-6 * f[0]);
+  EXPECT_NEAR(e, 0.5 * 1e13 * 1e-12 * d, 1e-9 * e);
+  // turned over by 180 degrees about the interface centre (d, d/2): x -> 2 c - x
+  Kokkos::deep_copy(x, sim.m.X);
+  for (int i = 4; i < 8; ++i) {
+    x(i, 0) = 2 * d - x(i, 0);
+    x(i, 1) = d - x(i, 1);
+  }
+  forces(f, e);
+  EXPECT_EQ(f[0], 0.0);
+  EXPECT_EQ(f[1], 0.0);
+  EXPECT_EQ(e, 0.0);
+  Kokkos::deep_copy(x, sim.m.X);
+  for (int i = 4; i < 8; ++i) x(i, 0) -= 1e-6;  // pressed again: parted for good
+  forces(f, e);
+  EXPECT_EQ(f[0], 0.0);
+  EXPECT_EQ(e, 0.0);
+  // half a face apart with an intact interface: it pulls the block back (no switch-off)
+  for (int k = 0; k < 2; ++k) h(0, k, 0) = h(0, k, 1) = h(0, k, 2) = 0;
+  Kokkos::deep_copy(sim.m.ihist, h);
+  Kokkos::deep_copy(sim.m.iparted, 0);
+  Kokkos::deep_copy(x, sim.m.X);
+  for (int i = 4; i < 8; ++i) x(i, 0) += 0.5 * d;
+  forces(f, e);
+  EXPECT_LT(f[0], 0.0);
+  EXPECT_GT(e, 0.0);
+}
+
 // 2D disc (h = 6 mm, about 500 triangles): at 2 m/s no interface fails and the disc rebounds in
 // one piece; at 12 m/s it breaks.
 TEST(Impact, ReboundsIntactBelowThresholdAndBreaksAbove) {

@@ -185,6 +185,7 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
   m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
   m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
+  m.iparted = Kokkos::View<int*>("fdem::iparted", ni);
   if (ni > 0) {
     if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
     const auto& im = c.interface_materials[c.fracture_material];
