@@ -321,7 +321,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   }
   if (np > 0) {
     results["peak_load_N"] = peak[0];
-    if (D == 2 && c.mesh.kind == "disc") {
+    if (D == 2 && c.mesh.kind == "disc" && np >= 2) {  // not for a disc striking one plate
       // Brazilian test: sigma_t = 2 P / (pi D L)
       results["tensile_strength_Pa"] = 2 * peak[0] / (M_PI * 2 * c.mesh.radius * c.thickness);
     }
