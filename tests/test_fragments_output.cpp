@@ -147,7 +147,8 @@ TEST(FragmentsOutput, CaseKeyIsABoolean) {
 // (a smaller size gives more elements) and element_size on a .msh file is refused.
 TEST(ImpactCases, ShippedCasesLoadAndGeoElementSizeControlsTheMesh) {
   for (const char* f : {"particle_impact_2d/case.json", "particle_impact_3d/case.json",
-                        "grain_crushing_3d/case.json", "grain_crushing_3d/case_polyhedron.json"})
+                        "particle_impact_3d/multi/case.json", "grain_crushing_3d/case.json",
+                        "grain_crushing_3d/case_polyhedron.json"})
     EXPECT_NO_THROW(load_case(kCases + f)) << f;
   const Case coarse = load_case(kCases + "grain_crushing_3d/case_polyhedron.json", {"parameters.h=0.008"});
   const Case fine = load_case(kCases + "grain_crushing_3d/case_polyhedron.json", {"parameters.h=0.005"});
