@@ -10,8 +10,9 @@
 // `par` per node, both starting as the node's own index;
 //   hook:     for every link (a, b) whose labels differ, par(max) = min(par(max), min) (atomic min
 //             on an int), where max/min are the two labels (roots of a star forest);
-//   compress: lab(i) = the root reached from i by following par (reads par only, writes lab);
-//   par = lab; repeat until no link has labels that differ.
+//   jump:     lab(i) = par(par(i)) into the other buffer, swap, repeat until no node changes
+//             (pointer jumping: O(log depth) passes, each reading one buffer and writing the other);
+//   repeat until no link has labels that differ.
 // Labels only decrease and always name a node of the same component, so at the end every node
 // carries the smallest node index of its component. Each round at least halves the number of
 // roots that still have a link to another root, so a mesh of n nodes needs O(log n) rounds.
@@ -20,6 +21,8 @@
 // Then fragment ids 0..nf-1 (in order of their smallest node index) by a scan over the roots,
 // per-fragment mass (rho V0 per element) and element count by a scatter, and the statistics by
 // reductions over the fragments; only a handful of numbers go to the host.
+#include <utility>
+
 #include "cohesive.hpp"
 #include "model.hpp"
 
@@ -57,48 +60,67 @@ int label_components(const Model<D>& m, const Kokkos::View<int*>& par, const Kok
   auto elem = m.elem;
   auto iface = m.iface;
   auto ihist = m.ihist;
-  auto P = par;
-  auto L = lab;
-  Kokkos::parallel_for(
-      "fdem::fragments::init", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
-        P(i) = i;
-        L(i) = i;
-      });
+  // P: parents being hooked; L: labels (a star forest: every node names its root). They are
+  // equal at the start of every round; the pointer jumping swaps the two buffers.
+  Kokkos::View<int*> P = par, L = lab;
+  {
+    auto a = P, b = L;
+    Kokkos::parallel_for(
+        "fdem::fragments::init", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
+          a(i) = i;
+          b(i) = i;
+        });
+  }
   int rounds = 0;
   for (;;) {
     ++rounds;
     int changed = 0;
-    Kokkos::parallel_reduce(
-        "fdem::fragments::hook", Kokkos::RangePolicy<ExecSpace>(0, ne + ni),
-        KOKKOS_LAMBDA(const int w, int& ch) {
-          if (w < ne) {
-            const int la = L(elem(w, 0));
-            for (int k = 1; k <= D; ++k) {
-              const int lb = L(elem(w, k));
-              if (lb != la) {
-                Kokkos::atomic_fetch_min(&P(la > lb ? la : lb), la < lb ? la : lb);
+    {
+      auto Pw = P;
+      auto Lr = L;
+      Kokkos::parallel_reduce(
+          "fdem::fragments::hook", Kokkos::RangePolicy<ExecSpace>(0, ne + ni),
+          KOKKOS_LAMBDA(const int w, int& ch) {
+            if (w < ne) {
+              const int la = Lr(elem(w, 0));
+              for (int k = 1; k <= D; ++k) {
+                const int lb = Lr(elem(w, k));
+                if (lb != la) {
+                  Kokkos::atomic_fetch_min(&Pw(la > lb ? la : lb), la < lb ? la : lb);
+                  ++ch;
+                }
+              }
+            } else {
+              const int q = w - ne;
+              const int la = Lr(iface(q, 0)), lb = Lr(iface(q, D));
+              if (la != lb && !interface_failed<D>(ihist, q)) {
+                Kokkos::atomic_fetch_min(&Pw(la > lb ? la : lb), la < lb ? la : lb);
                 ++ch;
               }
             }
-          } else {
-            const int q = w - ne;
-            const int la = L(iface(q, 0)), lb = L(iface(q, D));
-            if (la != lb && !interface_failed<D>(ihist, q)) {
-              Kokkos::atomic_fetch_min(&P(la > lb ? la : lb), la < lb ? la : lb);
-              ++ch;
-            }
-          }
-        },
-        changed);
+          },
+          changed);
+    }
     if (changed == 0) break;
-    Kokkos::parallel_for(
-        "fdem::fragments::compress", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
-          int r = P(i);
-          while (P(r) != r) r = P(r);
-          L(i) = r;
-        });
-    Kokkos::deep_copy(P, L);
+    // pointer jumping: L(i) = P(P(i)) from the other buffer, swap, until every node names a root
+    // (each pass halves the depth of the trees: O(log depth) passes, no data races)
+    for (;;) {
+      int deeper = 0;
+      auto Pr = P;
+      auto Lw = L;
+      Kokkos::parallel_reduce(
+          "fdem::fragments::jump", Kokkos::RangePolicy<ExecSpace>(0, nn),
+          KOKKOS_LAMBDA(const int i, int& d) {
+            const int p = Pr(i), g = Pr(p);
+            Lw(i) = g;
+            if (g != p) ++d;
+          },
+          deeper);
+      std::swap(P, L);
+      if (deeper == 0) break;  // P (now L's old buffer) and L hold the same stars
+    }
   }
+  if (L.data() != lab.data()) Kokkos::deep_copy(lab, L);
   return rounds;
 }
 
