@@ -57,6 +57,7 @@ struct Model {
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
+  Kokkos::View<int*> iparted;         // 1: failed and its faces have parted; carries nothing since
   CohesiveParams coh{};
 
   // outer boundary: nodes that can touch platens, with their contact (tributary) areas

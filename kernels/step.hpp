@@ -42,6 +42,46 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
   }
 }
 
+// A failed interface (every point at D = 1) whose faces have parted: some node pair is farther
+// apart than the A face's inradius (2D: half its length). Its mid-surface, and so the normal of
+// its compressive penalty, is then no longer meaningful (it degenerates when one fragment has
+// turned over against the other, and a penalty along a flipped normal pushes with the force of a
+// millimetre-deep overlap). From the step this is first seen on, the interface carries no force
+// and stores no energy, for good (Model::iparted; switching back on would release whatever
+// overlap its faces reached meanwhile). Faces that stay close (sliding or pressed together) keep
+// the penalty. A stop-gap until deformable contact handles failed faces.
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const double (&xb)[D][D],
+                                             const CohesivePoint (&h)[D]) {
+  for (int k = 0; k < D; ++k)
+    if (cohesive_damage(h[k]) < 1.0) return false;
+  double r2;
+  if constexpr (D == 2) {
+    const double tx = xa[1][0] - xa[0][0], ty = xa[1][1] - xa[0][1];
+    r2 = 0.25 * (tx * tx + ty * ty);
+  } else {
+    double e[3][3], per = 0;
+    for (int k = 0; k < 3; ++k) {
+      double l2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        e[k][i] = xa[(k + 1) % 3][i] - xa[k][i];
+        l2 += e[k][i] * e[k][i];
+      }
+      per += kmath::sqrt(l2);
+    }
+    const double c[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                         e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    const double r = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / per;  // 2 area / perimeter
+    r2 = r * r;
+  }
+  for (int k = 0; k < D; ++k) {
+    double d2 = 0;
+    for (int i = 0; i < D; ++i) d2 += (xb[k][i] - xa[k][i]) * (xb[k][i] - xa[k][i]);
+    if (d2 > r2) return true;
+  }
+  return false;
+}
+
 // Cohesive forces of one interface: updates the history of its points and returns the forces on
 // its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
 // point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
@@ -135,6 +175,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
   auto iface = m.iface;
   auto ihist = m.ihist;
   auto iarea = m.iarea;
+  auto iparted = m.iparted;
   const auto coh = m.coh;
   sf.reset();
   Kokkos::parallel_for(
@@ -156,6 +197,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
         } else {
           const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
           for (int q = i0; q < i1; ++q) {
+            if (iparted(q)) continue;
             double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
             CohesivePoint h[D];
             for (int k = 0; k < D; ++k) {
@@ -164,6 +206,10 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
                 xb[k][i] = x(iface(q, D + k), i);
               }
               h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+            }
+            if (interface_parted<D>(xa, xb, h)) {
+              iparted(q) = 1;
+              continue;
             }
             interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
             for (int k = 0; k < D; ++k) {
@@ -257,8 +303,9 @@ struct NodeUpdateParams {
 
 // Sums of one node update: energy dissipated by damping and work of the velocity BCs over this
 // step (0, 1); on sampled steps also the kinetic energy 0.5 m v(n-1/2).v(n+1/2) (the leap-frog's
-// conserved form) (2), and the work of gravity (3) and of the point loads (4) at x(n).
-using NodeSums = SumN<5>;
+// conserved form) (2), the work of gravity (3) and of the point loads (4) at x(n), and the linear
+// momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (5, 6, 7; components beyond D stay 0).
+using NodeSums = SumN<8>;
 
 // Central-difference update of all nodes with damping and velocity BCs; zeroes the force for the
 // next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
@@ -305,6 +352,7 @@ NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
             s.v[2] += 0.5 * mi * vo * vn;
             s.v[3] += mi * p.gravity[k] * u;
             s.v[4] += fe * u;
+            s.v[5 + k] += 0.5 * mi * (vo + vn);
           }
           v(i, k) = vn;
           x(i, k) += p.dt * vn;
@@ -350,6 +398,7 @@ SumN<4> interface_state(const Model<D>& m) {
   auto iface = m.iface;
   auto ihist = m.ihist;
   auto iarea = m.iarea;
+  auto iparted = m.iparted;
   const auto coh = m.coh;
   SumN<4> out;
   Kokkos::parallel_reduce(
@@ -361,6 +410,12 @@ SumN<4> interface_state(const Model<D>& m) {
             xa[k][i] = x(iface(q, k), i);
             xb[k][i] = x(iface(q, D + k), i);
           }
+        if (iparted(q)) {  // failed and apart: no stored energy
+          for (int k = 0; k < D; ++k) s.v[1] += iarea(q) * ihist(q, k, 3);
+          s.v[2] += 1.0;
+          s.v[3] += 1.0;
+          return;
+        }
         interface_frame<D>(xa, xb, 1.0, n, ap);
         ap = iarea(q);
         bool any = false, all = true;

@@ -755,9 +755,17 @@ void read_mesh(json& doc, Case& c, const Reader& R, const fs::path& base_dir, bo
     R.fail(P, "give either 'file' (a Gmsh .msh or .geo file) or 'generator' (rectangle, disc, box, sphere)");
   }
   if (has_file) {
-    R.keys(m, P, {"file"});
+    R.keys(m, P, {"file", "element_size"});
     std::string f = R.string(m, P, "file");
     if (f.empty()) R.fail(child(P, "file"), "empty file name");
+    if (m.contains("element_size")) {
+      std::string ext = fs::path(f).extension().string();
+      for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+      if (ext != ".geo")
+        R.fail(child(P, "element_size"), "applies to Gmsh geometry files (.geo) only, which are "
+                                         "meshed on reading; '" + f + "' is a mesh already");
+      s.element_size = R.number(m, P, "element_size", gt(0));
+    }
     fs::path p(f);
     if (p.is_relative()) p = base_dir / p;
     p = p.lexically_normal();
@@ -1034,7 +1042,8 @@ void read_time(json& doc, Case& c, const Reader& R) {
 void read_output(json& doc, Case& c, const Reader& R) {
   json& o = R.object(doc, "", "output", false);
   const std::string P = "output";
-  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors"});
+  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors",
+                "fragments"});
   if (o.contains("monitors")) {
     json& arr = R.array(o, P, "monitors", false);
     for (size_t i = 0; i < arr.size(); ++i) c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
@@ -1054,6 +1063,13 @@ void read_output(json& doc, Case& c, const Reader& R) {
   } else {
     long n = R.integer(o, P, "snapshot_count", 0, 1000000L, 0L);
     c.snapshot_interval = n > 0 ? c.end_time / static_cast<double>(n) : 0.0;
+  }
+  if (o.contains("fragments")) {
+    if (!o["fragments"].is_boolean())
+      R.fail(child(P, "fragments"), "expected true or false, got " + describe(o["fragments"]));
+    c.output_fragments = o["fragments"].get<bool>();
+  } else {
+    o["fragments"] = true;
   }
 }
 

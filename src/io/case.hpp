@@ -99,6 +99,7 @@ struct Case {
   double snapshot_interval = 0;  // s; 0: no snapshots
   int check_interval = 100;      // steps between stability checks (energy balance, finiteness)
   std::vector<std::string> monitors;  // node sets whose mean displacement goes into history.csv
+  bool output_fragments = true;  // fragments.csv and the snapshot field (runs with interfaces only)
 
   nlohmann::json resolved;       // the case after --set overrides and defaults, written to out/
 };

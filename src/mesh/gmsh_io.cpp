@@ -314,7 +314,7 @@ std::string lower_ext(const std::string& path) {
 
 }  // namespace
 
-HostMesh read_gmsh(const std::string& path, int dim) {
+HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
   if (dim != 2 && dim != 3)
     throw InputError(path + ": mesh dimension must be 2 or 3 (got " + std::to_string(dim) + ")");
   {
@@ -351,6 +351,10 @@ HostMesh read_gmsh(const std::string& path, int dim) {
     std::string err = GmshSession::first_error();
     if (!err.empty()) throw InputError(path + ": Gmsh could not read the file: " + err);
     if (geo) {
+      if (element_size > 0) {  // an upper bound on the element size, over the file's own sizes
+        gmsh::option::setNumber("Mesh.CharacteristicLengthMin", 0.0);
+        gmsh::option::setNumber("Mesh.CharacteristicLengthMax", element_size);
+      }
       gmsh_call(path, "mesh the geometry", [&] { gmsh::model::mesh::generate(dim); });
       err = GmshSession::first_error();
       if (!err.empty()) throw InputError(path + ": Gmsh could not mesh the geometry: " + err);

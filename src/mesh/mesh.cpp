@@ -461,7 +461,7 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
   const std::string region = spec.region.empty() ? std::string("body") : spec.region;
   if (spec.kind == "file") {
     if (spec.file.empty()) throw InputError("mesh kind 'file' needs a file name");
-    return read_gmsh(spec.file, dim);
+    return read_gmsh(spec.file, dim, spec.element_size);
   }
   if (spec.kind == "rectangle") {
     need_dim(2);

@@ -37,7 +37,8 @@ struct HostMesh {
 struct MeshSpec {
   std::string kind;         // "file", "rectangle", "disc", "box", "sphere"
   std::string file;         // kind == "file": path, already resolved against the case file's folder
-  double element_size = 0;  // generators (disc, sphere; rectangle/box derive nx,ny,nz if not given)
+  double element_size = 0;  // generators (disc, sphere; rectangle/box derive nx,ny,nz if not given);
+                            // .geo files: upper bound on the element size (0: the file's own)
   std::array<double, 3> origin{0, 0, 0};  // rectangle, box: lower corner; disc, sphere: centre
   std::array<double, 3> size{0, 0, 0};    // rectangle: width, height; box: lx, ly, lz
   double radius = 0;        // disc, sphere
@@ -47,7 +48,9 @@ struct MeshSpec {
 
 // Readers and generators. All throw InputError with a message naming the file (or generator), the
 // problem and, for bad elements, the element's index and location.
-HostMesh read_gmsh(const std::string& path, int dim);  // .msh 2.2/4.1 ASCII or binary, or .geo
+// .msh 2.2/4.1 ASCII or binary, or .geo (meshed on reading; element_size > 0 caps the element
+// size there, so that one geometry file serves coarse and fine meshes).
+HostMesh read_gmsh(const std::string& path, int dim, double element_size = 0);
 // Crossed-diagonal rectangle: nx*ny cells, 4 triangles per cell around a centre node.
 // Node sets: left/right/bottom/top (= xmin/xmax/ymin/ymax), and "all".
 HostMesh generate_crossed_rectangle(double x0, double y0, double w, double h, int nx, int ny,

@@ -185,6 +185,7 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
   m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
   m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
+  m.iparted = Kokkos::View<int*>("fdem::iparted", ni);
   if (ni > 0) {
     if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
     const auto& im = c.interface_materials[c.fracture_material];
@@ -440,6 +441,7 @@ void Simulation<D>::step(bool sample) {
       e.friction += platen_acc_host_(p, 4);
     }
     e.kinetic = w.v[2];
+    for (int k = 0; k < 3; ++k) e.momentum[k] = w.v[5 + k];
     e.damping = work_damping_ + 0.5 * w.v[0];
     e.work_external = wp + work_bc_ + 0.5 * w.v[1] + w.v[3] + w.v[4];
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +

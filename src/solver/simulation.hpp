@@ -22,6 +22,7 @@ struct Energies {
   double balance_error = 0;
   double scale = 0;          // magnitude the error is judged against
   long damaged = 0, failed = 0;
+  double momentum[3] = {0, 0, 0};  // total linear momentum sum m v at `time` (N s)
 };
 
 struct StableStep {
