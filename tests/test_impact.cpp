@@ -85,7 +85,7 @@ nlohmann::json run_quiet(const std::string& path, const std::vector<std::string>
 // leap-frog's momentum at x(n) is sum m (v(n-1/2) + v(n+1/2)) / 2).
 template <int D>
 void momentum_through_impact(const std::string& path, const std::vector<std::string>& overrides,
-                             int min_fragments) {
+                             int min_fragments, int max_fragments) {
   const Case c = load_case(path, overrides);
   const HostMesh mesh = case_mesh(c);
   Simulation<D> sim(c, mesh);
@@ -153,6 +153,7 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
   FragmentAnalysis<D> fa(sim.m);
   const FragmentStats st = fa.compute(sim.m);
   EXPECT_GE(st.count, min_fragments);
+  EXPECT_LE(st.count, max_fragments);
   const double mass = mesh_mass<D>(mesh, c.materials[0].density, D == 2 ? c.thickness : 1.0);
   EXPECT_NEAR(st.total_mass, mass, 1e-12 * mass);
   std::printf("  %dD: p0 %.6g N s, final %.6g N s, largest plate impulse %.6g N s, worst |dP - J| %.3g N s;"
@@ -164,18 +165,30 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
   EXPECT_NEAR(sum, mass, 1e-12 * mass);
 }
 
+// The speeds sit where the test's premises hold: the particle reaches the plate, every piece
+// leaves it again and flies freely for a while before the end, and the total momentum ends
+// upward. Faster, the premises fail for reasons of the model, not of momentum: the surface
+// elements at the contact break off and the body behind them, which the plate does not see (it
+// acts on the original outer surface only), sinks into it (3D sphere at 5 m/s on this mesh: 11
+// fragments, 10 nodes 1.4 mm below the plate after 200 us, momentum still downward), or the
+// split disc's pieces are still moving down onto the plate at the end (2D at 6 m/s: 8 fragments,
+// momentum -8.6 of -127 N s after 300 us). Both were measured after main's Delaunay generator
+// (dc1f07c) and initiation on the envelope (be6b5df) moved the breakage threshold.
+
 TEST(Impact, MomentumChangesOnlyByPlateImpulse2D) {
-  // 6 m/s: the disc breaks into a few pieces that rebound
-  momentum_through_impact<2>(kCase2D, {"parameters.speed=6", "parameters.h=0.006",
-                                       "parameters.duration=300e-6"},
-                             2);
+  // 4 m/s: the disc cracks from the contact, a few pieces break off (4 fragments) and all of them
+  // rebound (contact from 31 to 232 us of the 425 us run; momentum -84.6 -> +34.4 N s)
+  momentum_through_impact<2>(kCase2D, {"parameters.speed=4", "parameters.h=0.006",
+                                       "parameters.duration=400e-6"},
+                             2, 10);
 }
 
 TEST(Impact, MomentumChangesOnlyByPlateImpulse3D) {
-  // 5 m/s on a coarse sphere (about 700 tetrahedra): an elastic rebound
-  momentum_through_impact<3>(kCase3D, {"parameters.speed=5", "parameters.h=0.008",
+  // 3 m/s on a coarse sphere (about 700 tetrahedra): an elastic rebound, no interface fails (at
+  // 4 m/s 2 interfaces fail, at 5 m/s the contact zone breaks off)
+  momentum_through_impact<3>(kCase3D, {"parameters.speed=3", "parameters.h=0.008",
                                        "parameters.duration=200e-6"},
-                             1);
+                             1, 1);
 }
 
 // Free flight without a plate: a particle moving at (3, -5(, 2)) m/s that also expands at a rate
