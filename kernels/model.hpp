@@ -57,7 +57,10 @@ struct Model {
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
-  Kokkos::View<int*> iparted;         // 1: failed and its faces have parted; carries nothing since
+  // 1: failed and its faces have parted (interface_parted, kernels/step.hpp); it carries nothing
+  // and stores nothing from then on. Read by compute_forces and interface_state only; a stop-gap
+  // until contact takes failed faces over.
+  Kokkos::View<int*> iparted;
   CohesiveParams coh{};
 
   // outer boundary: nodes that can touch platens, with their contact (tributary) areas
