@@ -58,6 +58,12 @@ struct Model {
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
   CohesiveParams coh{};
+  // With contact (extent ni; extent 0 without): 1 once the interface has failed and its two faces
+  // were handed to contact (it then carries nothing), else 0. The force kernel sets
+  // icontact_pending when it meets a failed interface not handed over yet.
+  Kokkos::View<int*> icontact;
+  Kokkos::View<int> icontact_pending;
+  double handover_slip = 0;  // see interface_parted (kernels/step.hpp)
 
   // outer boundary: nodes that can touch platens, with their contact (tributary) areas
   Kokkos::View<int*> bnode;

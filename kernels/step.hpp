@@ -42,6 +42,29 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
   }
 }
 
+// A failed interface is handed over to contact once its faces have parted: open (normal gap >= 0
+// at every point), or slid by more than `slip` at some point. Until then the failed interface
+// keeps its compression penalty (the cohesive law at D = 1), which holds the crack faces apart
+// exactly where contact between them could not yet be trusted (faces still touching at a crack
+// tip, copies of a vertex still joined through other interfaces).
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const double (&xb)[D][D], double slip) {
+  double n[D], ap;
+  interface_frame<D>(xa, xb, 1.0, n, ap);
+  bool open = true, slid = false;
+  for (int k = 0; k < D; ++k) {
+    double d[D], dn = 0, d2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+      d2 += d[i] * d[i];
+    }
+    open = open && dn >= 0.0;
+    slid = slid || d2 - dn * dn > slip * slip;
+  }
+  return open || slid;
+}
+
 // Cohesive forces of one interface: updates the history of its points and returns the forces on
 // its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
 // point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
@@ -136,6 +159,10 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
   auto ihist = m.ihist;
   auto iarea = m.iarea;
   const auto coh = m.coh;
+  auto icontact = m.icontact;
+  auto pending = m.icontact_pending;
+  const bool handover = m.icontact.extent(0) > 0;
+  const double handover_slip = m.handover_slip;
   sf.reset();
   Kokkos::parallel_for(
       "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc + nic), KOKKOS_LAMBDA(const int c) {
@@ -156,6 +183,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
         } else {
           const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
           for (int q = i0; q < i1; ++q) {
+            if (handover && icontact(q)) continue;  // failed: its faces are in contact instead
             double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
             CohesivePoint h[D];
             for (int k = 0; k < D; ++k) {
@@ -165,7 +193,9 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
               }
               h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
             }
-            interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+            const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+            if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
+              Kokkos::atomic_exchange(&pending(), 1);
             for (int k = 0; k < D; ++k) {
               ihist(q, k, 0) = h[k].dmax;
               ihist(q, k, 1) = h[k].dm0;
@@ -351,6 +381,8 @@ SumN<4> interface_state(const Model<D>& m) {
   auto ihist = m.ihist;
   auto iarea = m.iarea;
   const auto coh = m.coh;
+  auto icontact = m.icontact;
+  const bool handover = m.icontact.extent(0) > 0;
   SumN<4> out;
   Kokkos::parallel_reduce(
       "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
@@ -363,6 +395,7 @@ SumN<4> interface_state(const Model<D>& m) {
           }
         interface_frame<D>(xa, xb, 1.0, n, ap);
         ap = iarea(q);
+        const bool handed = handover && icontact(q);  // carries nothing, stores nothing
         bool any = false, all = true;
         for (int k = 0; k < D; ++k) {
           const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
@@ -373,7 +406,7 @@ SumN<4> interface_state(const Model<D>& m) {
           }
           for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
           const double dmg = cohesive_damage(h);
-          s.v[0] += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
+          if (!handed) s.v[0] += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
           s.v[1] += ap * cohesive_dissipation(h);
           any = any || dmg > 0.0;
           all = all && dmg >= 1.0;
