@@ -553,24 +553,27 @@ struct PairScratch {
 // distance to the face's plane, through the nearest face. The potential 0.5 K A d^2 is continuous
 // (zero on e's boundary, the nearest face changes where two depths are equal), so contacts with
 // fragments neither create nor lose energy, and a node at a corner shared by many fragments is in
-// contact only with the one it has entered. Returns the depth (<= 0: outside; the search stops at
-// the first face the node is in front of) and sets `nearest` to the local index of the vertex
-// opposite the nearest face. Uses the planes from element_planes.
+// contact only with the one it has entered. Returns the depth (<= 0: outside) and the local
+// index of the vertex opposite the nearest face. Uses the planes from element_planes. (It takes
+// the surface, not the plane View: CUDA 13.0's cicc crashed on a device function with a
+// View<double* [D + 1][D + 1]> parameter.)
+struct ElementDepth {
+  double depth;  // <= 0: outside
+  int nearest;   // local index of the vertex opposite the nearest face (-1: outside)
+};
+
 template <int D>
-KOKKOS_INLINE_FUNCTION double element_depth(const Kokkos::View<double* [D + 1][D + 1]>& eplane, int e,
-                                            const double (&p)[D], int& nearest) {
-  double depth = 1e300;
-  nearest = -1;
+KOKKOS_INLINE_FUNCTION ElementDepth element_depth(const ContactSurface<D>& S, int e, const double (&p)[D]) {
+  ElementDepth r{1e300, -1};
   for (int a = 0; a <= D; ++a) {
-    double d = eplane(e, a, D);
-    for (int k = 0; k < D; ++k) d -= eplane(e, a, k) * p[k];
-    if (!(d > 0.0)) return d;
-    if (d < depth) {
-      depth = d;
-      nearest = a;
+    double d = S.eplane(e, a, D);
+    for (int k = 0; k < D; ++k) d -= S.eplane(e, a, k) * p[k];
+    if (d < r.depth) {
+      r.depth = d;
+      r.nearest = d > 0.0 ? a : -1;
     }
   }
-  return depth;
+  return r;
 }
 
 // Planes of the faces of the free elements at the current positions (see element_depth).
@@ -816,7 +819,9 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
           if (S.efree(own)) {  // a free element: contact through its nearest face, if inside
             if (own != last_e) {
               last_e = own;
-              last_d = element_depth<D>(S.eplane, own, xs, last_a);
+              const ElementDepth ed = element_depth<D>(S, own, xs);
+              last_d = ed.depth;
+              last_a = ed.nearest;
             }
             bool mine = last_d > 0.0 && last_d < L.dpen;
             for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
