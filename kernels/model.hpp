@@ -57,11 +57,15 @@ struct Model {
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
-  // 1: failed and its faces have parted (interface_parted, kernels/step.hpp); it carries nothing
-  // and stores nothing from then on. Read by compute_forces and interface_state only; a stop-gap
-  // until contact takes failed faces over.
-  Kokkos::View<int*> iparted;
   CohesiveParams coh{};
+  // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
+  // to contact when failed and parted (interface_parted, kernels/step.hpp), or, without contact,
+  // failed and separated (interface_separated). With contact (contact_handover), the force kernel
+  // sets icontact_pending when it meets a failed, parted interface not handed over yet.
+  Kokkos::View<int*> icontact;
+  Kokkos::View<int> icontact_pending;
+  bool contact_handover = false;
+  double handover_slip = 0;  // see interface_parted (kernels/step.hpp)
 
   // outer boundary: nodes that can touch platens, with their contact (tributary) areas
   Kokkos::View<int*> bnode;

@@ -42,17 +42,18 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
   }
 }
 
-// A failed interface (every point at D = 1) whose faces have parted: some node pair is farther
-// apart than the A face's inradius (2D: half its length). Its mid-surface, and so the normal of
+// Without contact (case key contact.enabled = false): a failed interface (every point at D = 1)
+// whose faces have separated: some node pair is farther apart than the A face's inradius (2D:
+// half its length). Its mid-surface, and so the normal of
 // its compressive penalty, is then no longer meaningful (it degenerates when one fragment has
 // turned over against the other, and a penalty along a flipped normal pushes with the force of a
 // millimetre-deep overlap). From the step this is first seen on, the interface carries no force
-// and stores no energy, for good (Model::iparted; switching back on would release whatever
+// and stores no energy, for good (Model::icontact; switching back on would release whatever
 // overlap its faces reached meanwhile). Faces that stay close (sliding or pressed together) keep
-// the penalty. A stop-gap until deformable contact handles failed faces.
+// the penalty. With contact on, interface_parted below decides instead, and contact takes over.
 template <int D>
-KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const double (&xb)[D][D],
-                                             const CohesivePoint (&h)[D]) {
+KOKKOS_INLINE_FUNCTION bool interface_separated(const double (&xa)[D][D], const double (&xb)[D][D],
+                                                const CohesivePoint (&h)[D]) {
   for (int k = 0; k < D; ++k)
     if (cohesive_damage(h[k]) < 1.0) return false;
   double r2;
@@ -80,6 +81,29 @@ KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const dou
     if (d2 > r2) return true;
   }
   return false;
+}
+
+// A failed interface is handed over to contact once its faces have parted: open (normal gap >= 0
+// at every point), or slid by more than `slip` at some point. Until then the failed interface
+// keeps its compression penalty (the cohesive law at D = 1), which holds the crack faces apart
+// exactly where contact between them could not yet be trusted (faces still touching at a crack
+// tip, copies of a vertex still joined through other interfaces).
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const double (&xb)[D][D], double slip) {
+  double n[D], ap;
+  interface_frame<D>(xa, xb, 1.0, n, ap);
+  bool open = true, slid = false;
+  for (int k = 0; k < D; ++k) {
+    double d[D], dn = 0, d2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+      d2 += d[i] * d[i];
+    }
+    open = open && dn >= 0.0;
+    slid = slid || d2 - dn * dn > slip * slip;
+  }
+  return open || slid;
 }
 
 // Cohesive forces of one interface: updates the history of its points and returns the forces on
@@ -175,8 +199,11 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
   auto iface = m.iface;
   auto ihist = m.ihist;
   auto iarea = m.iarea;
-  auto iparted = m.iparted;
   const auto coh = m.coh;
+  auto icontact = m.icontact;
+  auto pending = m.icontact_pending;
+  const bool handover = m.contact_handover;
+  const double handover_slip = m.handover_slip;
   sf.reset();
   Kokkos::parallel_for(
       "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc + nic), KOKKOS_LAMBDA(const int c) {
@@ -197,6 +224,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
         } else {
           const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
           for (int q = i0; q < i1; ++q) {
+            if (handover && icontact(q)) continue;  // failed: its faces are in contact instead
             double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
             CohesivePoint h[D];
             for (int k = 0; k < D; ++k) {
@@ -206,13 +234,16 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
               }
               h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
             }
-            // The only use of Model::iparted here (stop-gap until contact, see interface_parted):
-            // a failed interface whose faces have parted carries nothing from then on.
-            if (iparted(q) || interface_parted<D>(xa, xb, h)) {
-              iparted(q) = 1;
+            // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
+            // without contact, separated for good: interface_separated).
+            if (icontact(q)) continue;
+            if (!handover && interface_separated<D>(xa, xb, h)) {
+              icontact(q) = 1;
               continue;
             }
-            interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+            const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+            if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
+              Kokkos::atomic_exchange(&pending(), 1);
             for (int k = 0; k < D; ++k) {
               ihist(q, k, 0) = h[k].dmax;
               ihist(q, k, 1) = h[k].dm0;
@@ -399,8 +430,8 @@ SumN<4> interface_state(const Model<D>& m) {
   auto iface = m.iface;
   auto ihist = m.ihist;
   auto iarea = m.iarea;
-  auto iparted = m.iparted;
   const auto coh = m.coh;
+  auto icontact = m.icontact;
   SumN<4> out;
   Kokkos::parallel_reduce(
       "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
@@ -411,14 +442,9 @@ SumN<4> interface_state(const Model<D>& m) {
             xa[k][i] = x(iface(q, k), i);
             xb[k][i] = x(iface(q, D + k), i);
           }
-        if (iparted(q)) {  // failed and apart: no stored energy
-          for (int k = 0; k < D; ++k) s.v[1] += iarea(q) * ihist(q, k, 3);
-          s.v[2] += 1.0;
-          s.v[3] += 1.0;
-          return;
-        }
         interface_frame<D>(xa, xb, 1.0, n, ap);
         ap = iarea(q);
+        const bool handed = icontact(q);  // carries nothing, stores nothing
         bool any = false, all = true;
         for (int k = 0; k < D; ++k) {
           const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
@@ -429,7 +455,7 @@ SumN<4> interface_state(const Model<D>& m) {
           }
           for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
           const double dmg = cohesive_damage(h);
-          s.v[0] += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
+          if (!handed) s.v[0] += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
           s.v[1] += ap * cohesive_dissipation(h);
           any = any || dmg > 0.0;
           all = all && dmg >= 1.0;

@@ -55,8 +55,8 @@ inline fdem::HostMesh block_bar(int nb, double d, double h) {
       const int a = 4 * (j - 1);
       // A side: br, tr of the left block (normal +x); B side: bl, tl of this block
       for (int n : {a + 1, a + 2, b, b + 3}) m.ifaces.push_back(n);
-      m.iface_elems.push_back(2 * (j - 1));
-      m.iface_elems.push_back(2 * j);
+      m.iface_elems.push_back(2 * (j - 1));  // (a, a+1, a+2) holds br, tr
+      m.iface_elems.push_back(2 * j + 1);    // (b, b+2, b+3) holds bl, tl
     }
   }
   m.node_sets["left"] = {0, 3};

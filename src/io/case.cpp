@@ -1007,6 +1007,30 @@ void read_platens(json& doc, Case& c, const Reader& R) {
   }
 }
 
+void read_contact(json& doc, Case& c, const Reader& R) {
+  json& ct = R.object(doc, "", "contact", false);
+  const std::string P = "contact";
+  R.keys(ct, P, {"enabled", "kn", "ks", "friction", "cohesion", "skin"});
+  auto it = ct.find("enabled");
+  if (it == ct.end()) {
+    ct["enabled"] = "auto";
+    c.contact.enabled = -1;
+  } else if (it->is_boolean()) {
+    c.contact.enabled = it->get<bool>() ? 1 : 0;
+  } else if (it->is_string() && it->get<std::string>() == "auto") {
+    c.contact.enabled = -1;
+  } else {
+    R.fail(child(P, "enabled"), "expected true, false or \"auto\", got " + describe(*it));
+  }
+  c.contact.kn = R.number(ct, P, "kn", ge(0), 0.0);
+  c.contact.ks = R.number(ct, P, "ks", ge(0), 0.0);
+  const double mu0 =
+      c.fracture_material >= 0 ? std::tan(c.interface_materials[c.fracture_material].phi) : 0.0;
+  c.contact.friction = R.number(ct, P, "friction", ge(0), mu0);
+  c.contact.cohesion = R.number(ct, P, "cohesion", ge(0), 0.0);
+  c.contact.skin = R.number(ct, P, "skin", ge(0), 0.0);
+}
+
 void read_damping(json& doc, Case& c, const Reader& R) {
   json& dmp = R.object(doc, "", "damping", false);
   R.keys(dmp, "damping", {"local", "mass_proportional"});
@@ -1102,7 +1126,7 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
 
   R.keys(doc, "", {"name", "description", "dimension", "parameters", "mesh", "analysis",
                    "materials", "regions", "interface_materials", "fracture", "boundary",
-                   "platens", "damping", "time", "output"});
+                   "platens", "contact", "damping", "time", "output"});
   Case c;
   c.file = source;
   c.dim = static_cast<int>(R.integer(doc, "", "dimension", 2, 3));
@@ -1114,6 +1138,7 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
   read_interfaces(doc, c, R);
   read_boundary(doc, c, R);
   read_platens(doc, c, R);
+  read_contact(doc, c, R);
   read_damping(doc, c, R);
   read_time(doc, c, R);
   read_output(doc, c, R);

@@ -60,6 +60,16 @@ struct PlatenSpec {
   double cohesion = 0;     // Pa
 };
 
+// Contact between deformable bodies (METHOD.md section 6): the outer boundaries of the bodies
+// and the faces of failed interfaces. See docs/case-format.md, "contact".
+struct ContactSpec {
+  int enabled = -1;        // -1: auto (on when the mesh has interfaces or more than one body); 0: off; 1: on
+  double kn = 0, ks = 0;   // Pa/m per unit contact area; 0: derive
+  double friction = -1;    // Coulomb coefficient; < 0: derive (tan phi of the fracture material, else 0)
+  double cohesion = 0;     // Pa
+  double skin = 0;         // m, Verlet skin of the broad phase; 0: derive (0.1 mean element size)
+};
+
 struct Case {
   std::string file;     // path of the case file
   std::string name;
@@ -82,6 +92,7 @@ struct Case {
   Vec3 gravity{0, 0, 0};
   std::vector<InitialVelocity> initial_velocities;
   std::vector<PlatenSpec> platens;
+  ContactSpec contact;
 
   double local_damping = 0;      // alpha, [0, 1)
   double mass_damping = 0;       // c, 1/s

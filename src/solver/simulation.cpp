@@ -185,7 +185,7 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
   m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
   m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
-  m.iparted = Kokkos::View<int*>("fdem::iparted", ni);
+  m.icontact = Kokkos::View<int*>("fdem::icontact", ni);
   if (ni > 0) {
     if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
     const auto& im = c.interface_materials[c.fracture_material];
@@ -385,6 +385,12 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
     Kokkos::deep_copy(m.v, v_h);
   }
 
+  // ---- contact between bodies and fragments ----
+  if (contact_wanted(c, mesh)) {
+    contact_ = std::make_unique<ContactSystem<D>>(c, mesh, m, mass);
+    stable.springs = std::min(stable.springs, contact_->stable_step());
+  }
+
   // ---- time step ----
   stable.critical = 1.0 / std::sqrt(1.0 / (stable.bulk * stable.bulk) +
                                     (std::isfinite(stable.springs)
@@ -405,6 +411,7 @@ void Simulation<D>::step(bool sample) {
   sample = sample || !have_reference_;
   compute_forces<D>(m, scatter_);
   apply_platens<D>(m, t, dt);
+  if (contact_) contact_->update(m, dt);
   if (sample_reactions_) {
     for (size_t b = 0; b < bc_nodes_.size(); ++b) {
       double s[3] = {0, 0, 0};
@@ -424,7 +431,7 @@ void Simulation<D>::step(bool sample) {
       e.damaged = static_cast<long>(is.v[2]);
       e.failed = static_cast<long>(is.v[3]);
     }
-    e.contact_elastic = platen_energy<D>(m, t);
+    e.contact_elastic = platen_energy<D>(m, t) + (contact_ ? contact_->elastic_energy() : 0.0);
   }
   prm_.t = t;
   prm_.dt = dt;
@@ -440,6 +447,7 @@ void Simulation<D>::step(bool sample) {
       wp += platen_acc_host_(p, 3) - 0.5 * inc;
       e.friction += platen_acc_host_(p, 4);
     }
+    if (contact_) e.friction += contact_->dissipated();
     e.kinetic = w.v[2];
     for (int k = 0; k < 3; ++k) e.momentum[k] = w.v[5 + k];
     e.damping = work_damping_ + 0.5 * w.v[0];

@@ -2,12 +2,14 @@
 // One run's state on the device and the explicit time loop's building blocks. Templated on the
 // dimension (2, 3) and instantiated for both in simulation.cpp.
 #include <array>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "io/case.hpp"
 #include "mesh/mesh.hpp"
 #include "model.hpp"
+#include "solver/contact.hpp"
 #include "step.hpp"
 
 namespace fdem {
@@ -68,6 +70,14 @@ class Simulation {
   void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                 std::vector<double>& stress, std::vector<double>& damage);
 
+  // Contact between bodies and fragments (null when the case has it off; see solver/contact.hpp).
+  ContactSystem<D>* contact() { return contact_.get(); }
+  // Changes the damping from the next step on (e.g. settle quasi-statically, then run dynamically).
+  void set_damping(double local, double mass_proportional) {
+    prm_.alpha = local;
+    prm_.cmass = mass_proportional;
+  }
+
   // Divides the interface strengths f_t, c and tan(phi) of the case by `factor` (>= 0).
   void set_strength_reduction(double factor) {
     m.coh.ft = coh0_.ft / factor;
@@ -81,6 +91,7 @@ class Simulation {
  private:
   ForceScatter<D> scatter_;
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
+  std::unique_ptr<ContactSystem<D>> contact_;
   NodeUpdateParams prm_{};
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;

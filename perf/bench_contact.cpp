@@ -1,0 +1,159 @@
+// Cost of contact per step against the rest of the step (src/solver/contact.hpp).
+//
+//   bench_contact [cells2d=80] [cells3d=12] [steps=200]
+//
+// Scenes: a block with interfaces everywhere (2D: crossed rectangle cells x cells; 3D: box of
+// cells^3 hexahedra, 6 tetrahedra each) resting on a fixed floor under gravity, rock-like
+// material. For each dimension:
+//   off         contact disabled (the step as without this feature)
+//   intact      contact on, no interface failed: contact only watches for failures (the floor is a
+//               second body, so the broad and narrow phases run for the block's outer boundary)
+//   fragmented  contact on, every interface failed at the start: every element is a free piece
+// It prints ns per step (whole step), ns per contact update (timed separately on the same state)
+// and the rest of the step, with the contact statistics.
+#include <Kokkos_Core.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "mesh/mesh.hpp"
+#include "solver/simulation.hpp"
+
+namespace {
+
+using namespace fdem;
+using Clock = std::chrono::steady_clock;
+
+HostMesh merge(const HostMesh& a, const HostMesh& b) {
+  HostMesh m = a;
+  const int na = a.num_nodes(), ea = a.num_elems();
+  m.node_sets.clear();
+  for (const auto& [name, nodes] : a.node_sets) m.node_sets[a.region_names[0] + "." + name] = nodes;
+  m.X.insert(m.X.end(), b.X.begin(), b.X.end());
+  for (int n : b.elems) m.elems.push_back(n + na);
+  const int ra = static_cast<int>(a.region_names.size());
+  for (int r : b.elem_region) m.elem_region.push_back(r + ra);
+  m.region_names.insert(m.region_names.end(), b.region_names.begin(), b.region_names.end());
+  for (const auto& [name, nodes] : b.node_sets) {
+    std::vector<int> s;
+    for (int n : nodes) s.push_back(n + na);
+    m.node_sets[b.region_names[0] + "." + name] = s;
+  }
+  for (int n : b.ifaces) m.ifaces.push_back(n + na);
+  for (int e : b.iface_elems) m.iface_elems.push_back(e + ea);
+  for (int i = 0; i < b.num_nodes(); ++i)
+    m.node_origin.push_back((static_cast<int>(b.node_origin.size()) > i ? b.node_origin[i] : i) + na);
+  return m;
+}
+
+Case make_case(int dim, double h, int contact) {
+  Case c;
+  c.file = "bench";
+  c.name = "bench";
+  c.dim = dim;
+  c.materials = {BulkMaterial{"rock", 2700, 30e9, 0.25}};
+  c.region_material = {{"block", 0}, {"floor", 0}};
+  InterfaceMaterial im;
+  im.name = "if";
+  im.kn = 30e9 / (0.1 * h);
+  im.ks = im.kn / 2.5;
+  im.ft = 1e30;  // no failures during the run
+  im.c = 1e30;
+  im.phi = 0.5;
+  im.Gnc = 1e30;
+  im.Gsc = 1e30;
+  c.interface_materials = {im};
+  c.fracturable_regions = {"block"};
+  c.fracture_material = 0;
+  c.contact.enabled = contact;
+  c.contact.friction = 0.5;
+  VelocityBC fix;
+  fix.set = "floor.all";
+  fix.active = {true, true, true};
+  c.velocity_bcs = {fix};
+  c.gravity = {0, 0, 0};
+  c.gravity[dim - 1] = -9.81;
+  c.local_damping = 0.7;
+  c.end_time = 1;
+  return c;
+}
+
+template <int D>
+HostMesh scene(int cells) {
+  const double L = 1.0;
+  HostMesh block, floor;
+  if constexpr (D == 2) {
+    block = generate_crossed_rectangle(0, 0, L, L, cells, cells, "block");
+    floor = generate_crossed_rectangle(-0.25 * L, -0.1 * L, 1.5 * L, 0.1 * L, cells + cells / 2, 2, "floor");
+  } else {
+    block = generate_box({0, 0, 0}, {L, L, L}, cells, cells, cells, "block");
+    floor = generate_box({-0.25 * L, -0.25 * L, -0.1 * L}, {1.5 * L, 1.5 * L, 0.1 * L}, cells + cells / 2,
+                         cells + cells / 2, 1, "floor");
+  }
+  insert_interfaces(block, {true});
+  HostMesh m = merge(floor, block);
+  return m;
+}
+
+template <int D>
+void fail_all(Simulation<D>& sim) {
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  for (int q = 0; q < sim.m.ni; ++q)
+    for (int k = 0; k < D; ++k) {
+      h(q, k, 0) = 1.0;
+      h(q, k, 1) = 0.5;
+      h(q, k, 2) = 1.0;
+      h(q, k, 3) = 0.0;
+    }
+  Kokkos::deep_copy(sim.m.ihist, h);
+  sim.contact()->check_failures(sim.m);
+}
+
+template <int D>
+void run(int cells, int steps) {
+  const HostMesh mesh = scene<D>(cells);
+  const double h = 1.0 / cells;
+  std::printf("%dD: %d elements, %d nodes, %d interfaces\n", D, mesh.num_elems(), mesh.num_nodes(),
+              mesh.num_ifaces());
+  for (const std::string mode : {"off", "intact", "fragmented"}) {
+    Simulation<D> sim(make_case(D, h, mode == "off" ? 0 : 1), mesh);
+    if (mode == "fragmented") fail_all(sim);
+    for (int s = 0; s < 50; ++s) sim.step();  // warm-up (first build, first contacts)
+    Kokkos::fence();
+    auto t0 = Clock::now();
+    for (int s = 0; s < steps; ++s) sim.step();
+    Kokkos::fence();
+    const double step_ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / steps;
+    double contact_ns = 0;
+    ContactSystem<D>* ct = sim.contact();
+    if (ct) {
+      t0 = Clock::now();
+      for (int s = 0; s < steps; ++s) ct->update(sim.m, sim.dt);
+      Kokkos::fence();
+      contact_ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / steps;
+      Kokkos::deep_copy(sim.m.f, 0.0);
+    }
+    std::printf("  %-10s  step %12.0f ns   contact %12.0f ns   rest %12.0f ns   (contact %5.1f %%)", mode.c_str(),
+                step_ns, contact_ns, step_ns - contact_ns, 100.0 * contact_ns / step_ns);
+    if (ct)
+      std::printf("   surface nodes %d, active faces %d, candidates %d, contacts %d, builds %ld",
+                  ct->surface_nodes(), ct->active_faces(), ct->candidates(), ct->active_contacts(),
+                  ct->builds());
+    std::printf("\n");
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Kokkos::ScopeGuard guard(argc, argv);
+  const int c2 = argc > 1 ? std::atoi(argv[1]) : 80;
+  const int c3 = argc > 2 ? std::atoi(argv[2]) : 12;
+  const int steps = argc > 3 ? std::atoi(argv[3]) : 200;
+  std::printf("bench_contact: %s, concurrency %d\n", ExecSpace::name(), ExecSpace().concurrency());
+  run<2>(c2, steps);
+  run<3>(c3, steps);
+  return 0;
+}

@@ -1,0 +1,102 @@
+#pragma once
+// Contact between deformable bodies and fragments (METHOD.md section 6): host orchestration of the
+// device kernels in kernels/contact.hpp. Owned by Simulation<D>, called once per step after the
+// platens and before the node update.
+//
+// Surfaces: the outer boundary faces of every body (always active) and both faces of every
+// interface, active once the interface has failed (all its points at D = 1); the cohesive kernel
+// then skips that interface ("handover"). The surface nodes are the nodes of active faces.
+// A node and a face are never in contact when the node belongs to the face's element or when the
+// node and a vertex of the face are copies of one mesh vertex still joined by intact interfaces
+// around that vertex (they are one piece of material there). The outer boundary of a body is thus
+// checked against other bodies and fragments; a single intact body is not checked against itself
+// (no self-contact of a folding body), and contact does no work at all until a second body exists
+// or an interface has failed.
+//
+// Broad phase: uniform cell grid + candidate lists, rebuilt only when a surface node has moved
+// more than half the skin since the last build. Narrow phase every step over the candidates.
+#include <memory>
+#include <vector>
+
+#include "../../kernels/contact.hpp"  // the device kernels (a plain "contact.hpp" is this file)
+#include "io/case.hpp"
+#include "mesh/mesh.hpp"
+#include "model.hpp"
+
+namespace fdem {
+
+// The 'enabled' rule of the case's contact object: on/off as given; "auto" (default): on when the
+// mesh has interfaces or more than one body (connected piece of elements).
+bool contact_wanted(const Case& c, const HostMesh& mesh);
+
+template <int D>
+class ContactSystem {
+ public:
+  // mesh: after interface insertion; mass: lumped nodal masses (for the stable step). Allocates
+  // the contact data and the interface handover flags in m.
+  ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m, const std::vector<double>& mass);
+
+  // One step at positions m.x and velocities m.v (v(n-1/2)): hands failed interfaces over,
+  // rebuilds the candidate lists when needed, adds the contact forces to m.f.
+  void update(const Model<D>& m, double dt);
+  // Hands every failed interface over now (update() does it when the force kernel flags one).
+  void check_failures(const Model<D>& m);
+
+  // Smallest stable step of the contact springs, 2 / omega with omega^2 = max(K_n, K_s) A / m per
+  // surface node (A: its tributary area on all faces that can become surfaces, m: its mass).
+  double stable_step() const { return stable_; }
+  // Elastic energy in the contact springs at the last update.
+  double elastic_energy() const;
+  // Energy dissipated by friction (and released shear springs) so far.
+  double dissipated() const { return dissipated_; }
+
+  ContactLaw law{};      // penalty, friction, tolerances (public: tests change friction)
+  double skin = 0;       // Verlet skin (m)
+  double radius = 0;     // search distance = law.dpen + skin
+
+  // Statistics.
+  bool may_meet() const { return may_meet_; }
+  int surface_nodes() const { return ns_; }
+  int active_faces() const { return na_; }
+  int candidates() const { return cur_.size; }
+  int active_contacts() const { return active_; }
+  long builds() const { return builds_; }
+  long handed_over() const { return handed_; }
+  int bodies() const { return bodies_; }
+
+  // Device data (read by tests).
+  const PairList<D>& pairs() const { return cur_; }
+  const Kokkos::View<int*>& surface_node_list() const { return slaves_; }
+  const ContactSurface<D>& surface() const { return surf_; }
+
+  // Internal steps (public only because CUDA lambdas may not sit in private member functions):
+  // recompute active faces, clusters and surface nodes; rebuild the grid and candidate lists.
+  void refresh_surfaces(const Model<D>& m);
+  void build(const Model<D>& m);
+
+ private:
+  int nn_ = 0, ni_ = 0, nf_ = 0, ne_ = 0, nfree_ = 0;
+  double stable_ = 0;
+  ContactSurface<D> surf_;
+  PairFilter<D> filter_;
+  Kokkos::View<int*> goff_, gent_, gcopy_off_, gcopy_;  // vertex groups with interfaces (CSR)
+  int ngroups_ = 0;
+  Kokkos::View<int*> afaces_, slaves_, mark_;
+  int na_ = 0, ns_ = 0;
+  CellGrid<D> grid_;
+  long cell_cap_ = 0;
+  PairList<D> cur_, next_;
+  PairScratch<D> scratch_;
+  Kokkos::View<double* [D]> xb_;           // positions at the last build
+  bool may_meet_ = false, need_build_ = true;
+  int bodies_ = 0;
+  int check_every_ = 1, since_check_ = 0;
+  int active_ = 0;
+  long builds_ = 0, handed_ = 0;
+  double dissipated_ = 0;
+};
+
+extern template class ContactSystem<2>;
+extern template class ContactSystem<3>;
+
+}  // namespace fdem
