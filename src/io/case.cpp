@@ -1058,7 +1058,8 @@ void read_time(json& doc, Case& c, const Reader& R) {
 void read_output(json& doc, Case& c, const Reader& R) {
   json& o = R.object(doc, "", "output", false);
   const std::string P = "output";
-  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors"});
+  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors",
+                "checkpoint_every"});
   if (o.contains("monitors")) {
     json& arr = R.array(o, P, "monitors", false);
     for (size_t i = 0; i < arr.size(); ++i) c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
@@ -1079,6 +1080,7 @@ void read_output(json& doc, Case& c, const Reader& R) {
     long n = R.integer(o, P, "snapshot_count", 0, 1000000L, 0L);
     c.snapshot_interval = n > 0 ? c.end_time / static_cast<double>(n) : 0.0;
   }
+  if (o.contains("checkpoint_every")) c.checkpoint_every = R.number(o, P, "checkpoint_every", ge(0));
 }
 
 Case parse_impl(json doc, const std::string& source, const std::vector<std::string>& overrides,
