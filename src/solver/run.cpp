@@ -434,10 +434,12 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
 
 namespace {
 
-// The resolved case without the keys that do not change the results (the checkpoint interval).
+// The resolved case without the keys that do not change the results: the checkpoint interval,
+// and the mesh file's path (its content is in the mesh hash; the project folder may move).
 std::string case_hash(const Case& c) {
   nlohmann::json r = c.resolved;
   if (r.contains("output") && r["output"].is_object()) r["output"].erase("checkpoint_every");
+  if (r.contains("mesh") && r["mesh"].is_object() && r["mesh"].contains("file")) r["mesh"]["file"] = "";
   const std::string text = r.dump();
   return hash_hex(text.data(), text.size());
 }
