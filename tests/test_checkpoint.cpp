@@ -16,6 +16,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -194,13 +195,17 @@ class CheckpointRestart : public ::testing::Test {
   // The uninterrupted run (one thread, no checkpoints), shared by the tests.
   static void SetUpTestSuite() {
     ref_dir_ = tmpdir("reference");
+    const auto t0 = std::chrono::steady_clock::now();
     ASSERT_EQ(run_disc(ref_dir_, 1), 0) << slurp(ref_dir_ + ".log");
+    ref_wall_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     ref_ = results(ref_dir_);
   }
   static std::string ref_dir_;
   static Results ref_;
+  static double ref_wall_;  // s, the whole process
 };
 std::string CheckpointRestart::ref_dir_;
+double CheckpointRestart::ref_wall_ = 0;
 Results CheckpointRestart::ref_;
 
 TEST_F(CheckpointRestart, KilledAfterCheckpointRestartsBitwise) {
@@ -277,6 +282,32 @@ TEST_F(CheckpointRestart, KillWhileWritingKeepsPreviousCheckpoint) {
   ASSERT_EQ(run_disc(out + "_end", 1, "--restart " + out + "_end/checkpoint.h5"), 0)
       << slurp(out + "_end.log");
   EXPECT_EQ(differ(ref_, results(out + "_end")), "");
+}
+
+// Killed at an arbitrary moment (SIGKILL from outside after a wall time between 40 % and 95 % of
+// the reference run's, so it may fall in a step, a history row, a snapshot or a checkpoint):
+// the restart from whatever checkpoint is there reproduces the uninterrupted run.
+TEST_F(CheckpointRestart, KilledAtArbitraryMomentRestartsBitwise) {
+  const double wall = ref_wall_;
+  static unsigned calls = 0;  // --gtest_repeat: another moment each time
+  const unsigned seed = static_cast<unsigned>(::getpid()) + 7919u * calls++;
+  const double delay = wall * (0.4 + 0.55 * ((seed * 2654435761u) % 1000u) / 1000.0);
+  SCOPED_TRACE("kill after " + std::to_string(delay) + " s of " + std::to_string(wall) + " s");
+  const std::string out = tmpdir("arbitrary");
+  const int rc = run_disc(out, 1, every(kEvery / 4), "timeout -s KILL " + std::to_string(delay));
+  if (rc == 0) GTEST_SKIP() << "the run finished before the kill";
+  ASSERT_EQ(rc, 128 + 9) << slurp(out + ".log");
+  if (!fs::exists(out + "/checkpoint.h5")) GTEST_SKIP() << "killed before the first checkpoint";
+  ASSERT_EQ(run_disc(out, 1, every(kEvery / 4) + " --restart " + out + "/checkpoint.h5"), 0)
+      << slurp(out + ".log");
+  const Results r = results(out);
+  if (slurp(out + ".log").find("snapshots.h5.damaged") != std::string::npos) {
+    // killed while writing a frame: the frames from the restart on must still agree
+    EXPECT_EQ(r.history, ref_.history);
+    EXPECT_EQ(r.x.back(), ref_.x.back());
+  } else {
+    EXPECT_EQ(differ(ref_, r), "");
+  }
 }
 
 // A snapshots.h5 that cannot be continued (here: cut short, as a full disk or a kill in the middle
