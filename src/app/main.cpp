@@ -60,11 +60,19 @@ int main(int argc, char** argv) {
   std::string case_path, out_dir;
   std::vector<std::string> sets;
   bool quiet = false;
+  double checkpoint_every = -1;
+  std::string restart;
   auto* run = app.add_subcommand("run", "run a case");
   run->add_option("case", case_path, "case file (JSON)")->required();
   run->add_option("--out", out_dir, "output folder (default: out/<case name>)");
   run->add_option("--set", sets, "override a case field: key.path=value (repeatable)");
   run->add_flag("--quiet", quiet, "no progress output");
+  run->add_option("--checkpoint-every", checkpoint_every,
+                  "write OUT/checkpoint.h5 every this many seconds of simulated time (overrides "
+                  "output.checkpoint_every; 0: none)")
+      ->check(CLI::NonNegativeNumber);
+  run->add_option("--restart", restart,
+                  "go on from a checkpoint written by --checkpoint-every (same case and --set options)");
 
   auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");
   check->add_option("case", case_path, "case file (JSON)")->required();
@@ -96,6 +104,8 @@ int main(int argc, char** argv) {
       opt.out_dir = out_dir;
       opt.overrides = sets;
       opt.progress = !quiet;
+      opt.checkpoint_every = checkpoint_every;
+      opt.restart = restart;
       fdem::run_case(case_path, opt);
     }
   } catch (const fdem::InputError& e) {

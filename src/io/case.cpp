@@ -1067,7 +1067,7 @@ void read_output(json& doc, Case& c, const Reader& R) {
   json& o = R.object(doc, "", "output", false);
   const std::string P = "output";
   R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors",
-                "fragments"});
+                "fragments", "checkpoint_every"});
   if (o.contains("monitors")) {
     json& arr = R.array(o, P, "monitors", false);
     for (size_t i = 0; i < arr.size(); ++i) c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
@@ -1095,6 +1095,7 @@ void read_output(json& doc, Case& c, const Reader& R) {
   } else {
     o["fragments"] = true;
   }
+  if (o.contains("checkpoint_every")) c.checkpoint_every = R.number(o, P, "checkpoint_every", ge(0));
 }
 
 Case parse_impl(json doc, const std::string& source, const std::vector<std::string>& overrides,

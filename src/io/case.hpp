@@ -108,6 +108,7 @@ struct Case {
 
   double history_interval = 0;   // s; 0: 200 rows over the run
   double snapshot_interval = 0;  // s; 0: no snapshots
+  double checkpoint_every = 0;   // s of simulated time between checkpoints; 0: none
   int check_interval = 100;      // steps between stability checks (energy balance, finiteness)
   std::vector<std::string> monitors;  // node sets whose mean displacement goes into history.csv
   bool output_fragments = true;  // fragments.csv and the snapshot field (runs with interfaces only)

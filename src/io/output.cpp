@@ -19,6 +19,7 @@
 #include <hdf5.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -87,6 +88,13 @@ void write_file_atomic(const std::string& path, const std::string& text) {
     std::fclose(f);
     fail("flushing " + tmp, err);
   }
+  if (::fsync(fileno(f)) != 0) {
+    const int err = errno;
+    if (err != EINVAL && err != EROFS) {  // not syncable (a pipe, a special file): go on
+      std::fclose(f);
+      fail("syncing " + tmp, err);
+    }
+  }
   if (std::fclose(f) != 0) fail("closing " + tmp, errno);
   if (std::rename(tmp.c_str(), path.c_str()) != 0) fail("renaming " + tmp, errno);
 }
@@ -128,6 +136,43 @@ HistoryWriter::HistoryWriter(const std::string& path, const std::vector<std::str
   }
 }
 
+HistoryWriter::HistoryWriter(const std::string& path, const std::vector<std::string>& columns,
+                             const std::vector<double>& earlier_rows)
+    : path_(path), columns_(columns) {
+  const size_t nc = columns_.size();
+  if (nc == 0 || earlier_rows.size() % nc != 0)
+    throw std::logic_error("HistoryWriter: earlier rows do not fit the columns of '" + path + "'");
+  std::string text;
+  for (size_t i = 0; i < nc; ++i) {
+    if (i) text += ',';
+    text += csv_field(columns_[i]);
+  }
+  text += '\n';
+  std::vector<double> row(nc);
+  for (size_t r = 0; r < earlier_rows.size() / nc; ++r) {
+    row.assign(earlier_rows.begin() + static_cast<long>(r * nc), earlier_rows.begin() + static_cast<long>((r + 1) * nc));
+    text += format_row(row);
+  }
+  write_file_atomic(path, text);
+  f_ = std::fopen(path.c_str(), "a");
+  if (!f_) {
+    const int err = errno;
+    throw InputError("cannot open history file '" + path + "' for appending: " + std::strerror(err));
+  }
+}
+
+std::string HistoryWriter::format_row(const std::vector<double>& values) {
+  std::string line;
+  char buf[64];
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (i) line += ',';
+    std::snprintf(buf, sizeof buf, "%.10g", values[i]);
+    line += buf;
+  }
+  line += '\n';
+  return line;
+}
+
 HistoryWriter::~HistoryWriter() {
   if (f_) std::fclose(f_);
 }
@@ -138,14 +183,7 @@ void HistoryWriter::row(const std::vector<double>& values) {
                            " values for " + std::to_string(columns_.size()) + " columns in '" +
                            path_ + "'");
   }
-  std::string line;
-  char buf[64];
-  for (size_t i = 0; i < values.size(); ++i) {
-    if (i) line += ',';
-    std::snprintf(buf, sizeof buf, "%.10g", values[i]);
-    line += buf;
-  }
-  line += '\n';
+  const std::string line = format_row(values);
   if (std::fputs(line.c_str(), f_) < 0 || std::fflush(f_) != 0) {
     const int err = errno;
     throw InputError("cannot write history file '" + path_ + "': " + std::strerror(err));
@@ -272,6 +310,127 @@ SnapshotWriter::SnapshotWriter(const std::string& dir, const HostMesh& mesh)
       nn_(mesh.num_nodes()),
       ne_(mesh.num_elems()),
       ni_(mesh.num_ifaces()) {
+  create(mesh);
+}
+
+SnapshotWriter::SnapshotWriter(const std::string& dir, const HostMesh& mesh,
+                               const std::vector<long>& steps, const std::vector<double>& times,
+                               std::string& note)
+    : dir_(dir.empty() ? std::string(".") : dir),
+      dim_(mesh.dim),
+      nn_(mesh.num_nodes()),
+      ne_(mesh.num_elems()),
+      ni_(mesh.num_ifaces()) {
+  note.clear();
+  std::string why;
+  if (reopen(steps, times, why)) return;
+  if (file_ >= 0) H5Fclose(static_cast<hid_t>(file_));
+  file_ = -1;
+  times_.clear();
+  steps_.clear();
+  has_fragment_ = false;
+  const fs::path h5 = fs::path(dir_) / kH5Name;
+  std::error_code ec;
+  if (fs::exists(h5, ec)) {
+    fs::rename(h5, fs::path(dir_) / (std::string(kH5Name) + ".damaged"), ec);
+    note = h5.string() + " cannot be continued (" + why + "); moved to " + kH5Name +
+           ".damaged; the new file holds the frames from the restart on";
+  } else {
+    note = h5.string() + " is missing; the new file holds the frames from the restart on";
+  }
+  create(mesh);
+}
+
+bool SnapshotWriter::reopen(const std::vector<long>& steps, const std::vector<double>& times,
+                            std::string& why) {
+  silence_hdf5();
+  const std::string path = (fs::path(dir_) / kH5Name).string();
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    why = "missing";
+    return false;
+  }
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    H5Eclear2(H5E_DEFAULT);
+    why = "not a readable HDF5 file";
+    return false;
+  }
+  H5Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+#if H5_VERSION_GE(1, 10, 7)
+  H5Pset_file_locking(fapl.get(), 0, 1);
+#endif
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get());
+  if (file < 0) {
+    why = "cannot open it" + [] { const std::string r = hdf5_reason(); return r.empty() ? r : ": " + r; }();
+    return false;
+  }
+  file_ = static_cast<long long>(file);
+  auto attr = [&](const char* name, int& out) {
+    hid_t a = H5Aopen_by_name(file, "/mesh", name, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0) return false;
+    const bool ok = H5Aread(a, H5T_NATIVE_INT, &out) >= 0;
+    H5Aclose(a);
+    return ok;
+  };
+  int d = 0, nn = 0, ne = 0, ni = 0;
+  if (!attr("dim", d) || !attr("num_nodes", nn) || !attr("num_elements", ne) ||
+      !attr("num_interfaces", ni)) {
+    H5Eclear2(H5E_DEFAULT);
+    why = "no readable /mesh";
+    return false;
+  }
+  if (d != dim_ || nn != nn_ || ne != ne_ || ni != ni_) {
+    why = "it holds another mesh";
+    return false;
+  }
+  // frames in the file: keep those listed, delete the others (written after the checkpoint)
+  std::vector<std::string> names;
+  {
+    H5G_info_t info;
+    if (H5Gget_info(file, &info) < 0) {
+      why = "cannot list its frames";
+      return false;
+    }
+    for (hsize_t i = 0; i < info.nlinks; ++i) {
+      const ssize_t len = H5Lget_name_by_idx(file, "/", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+      if (len < 0) {
+        why = "cannot list its frames";
+        return false;
+      }
+      std::string n(static_cast<size_t>(len) + 1, '\0');
+      H5Lget_name_by_idx(file, "/", H5_INDEX_NAME, H5_ITER_INC, i, n.data(), n.size(), H5P_DEFAULT);
+      n.resize(static_cast<size_t>(len));
+      if (n.rfind("step_", 0) == 0) names.push_back(n);
+    }
+  }
+  std::vector<std::string> keep;
+  for (long st : steps) keep.push_back(step_name(st));
+  for (const auto& k : keep)
+    if (std::find(names.begin(), names.end(), k) == names.end() ||
+        H5Lexists(file, ("/" + k + "/damage").c_str(), H5P_DEFAULT) <= 0) {
+      H5Eclear2(H5E_DEFAULT);
+      why = "frame '" + k + "' is missing";
+      return false;
+    }
+  for (const auto& n : names)
+    if (std::find(keep.begin(), keep.end(), n) == keep.end() &&
+        H5Ldelete(file, ("/" + n).c_str(), H5P_DEFAULT) < 0) {
+      why = "cannot delete frame '" + n + "' written after the checkpoint";
+      return false;
+    }
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) {
+    why = "cannot flush it";
+    return false;
+  }
+  steps_ = steps;
+  times_ = times;
+  for (const auto& k : keep)
+    if (H5Lexists(file, ("/" + k + "/fragment").c_str(), H5P_DEFAULT) > 0) has_fragment_ = true;
+  write_xdmf();
+  return true;
+}
+
+void SnapshotWriter::create(const HostMesh& mesh) {
   if (dim_ != 2 && dim_ != 3) {
     throw std::logic_error("SnapshotWriter: mesh dimension must be 2 or 3, not " +
                            std::to_string(dim_));

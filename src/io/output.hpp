@@ -15,7 +15,9 @@ namespace fdem {
 // Creates `dir` (and parents) if needed; throws InputError if it cannot be created or written.
 void ensure_output_dir(const std::string& dir);
 
-// Writes `text` to `path` atomically (to path.tmp, then rename). Throws InputError on failure.
+// Writes `text` to `path` atomically (to path.tmp in the same folder, fsync, then rename): a
+// reader sees the old or the new content, never part of it. Throws InputError naming the file on
+// failure (full disk, unwritable folder); the old content is then left as it was.
 void write_file_atomic(const std::string& path, const std::string& text);
 
 // history.csv: header "name [unit]" columns, one row per call; flushed each row so that a killed
@@ -23,10 +25,16 @@ void write_file_atomic(const std::string& path, const std::string& text);
 class HistoryWriter {
  public:
   HistoryWriter(const std::string& path, const std::vector<std::string>& columns);
+  // Continues a history (restart): the file is rewritten atomically with the header and
+  // `earlier_rows` (row-major, columns.size() values each), then appended to.
+  HistoryWriter(const std::string& path, const std::vector<std::string>& columns,
+                const std::vector<double>& earlier_rows);
   ~HistoryWriter();
   HistoryWriter(const HistoryWriter&) = delete;
   HistoryWriter& operator=(const HistoryWriter&) = delete;
   void row(const std::vector<double>& values);
+  // One row as written to the file (%.10g, comma separated, newline).
+  static std::string format_row(const std::vector<double>& values);
   const std::vector<std::string>& columns() const { return columns_; }
 
  private:
@@ -56,14 +64,24 @@ struct SnapshotFrame {
 class SnapshotWriter {
  public:
   SnapshotWriter(const std::string& dir, const HostMesh& mesh);
+  // Continues DIR/snapshots.h5 (restart): keeps the frames `steps` (with their `times`), deletes
+  // any later frame and rewrites the XDMF. When the file cannot be continued (missing, damaged,
+  // another mesh, a kept frame missing) it is moved to snapshots.h5.damaged, a new file is
+  // started and `note` says so (empty otherwise).
+  SnapshotWriter(const std::string& dir, const HostMesh& mesh, const std::vector<long>& steps,
+                 const std::vector<double>& times, std::string& note);
   ~SnapshotWriter();
   SnapshotWriter(const SnapshotWriter&) = delete;
   SnapshotWriter& operator=(const SnapshotWriter&) = delete;
   void write(const SnapshotFrame& frame);
   int frames() const { return static_cast<int>(times_.size()); }
+  const std::vector<long>& steps() const { return steps_; }
+  const std::vector<double>& times() const { return times_; }
 
  private:
   void write_xdmf() const;
+  void create(const HostMesh& mesh);
+  bool reopen(const std::vector<long>& steps, const std::vector<double>& times, std::string& why);
   std::string dir_;
   int dim_, nn_, ne_, ni_;
   long long file_ = -1;  // hid_t

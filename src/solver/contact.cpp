@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "common/error.hpp"
+#include "solver/state_io.hpp"
 #include "step.hpp"
 
 namespace fdem {
@@ -557,6 +558,78 @@ template <int D>
 double ContactSystem<D>::elastic_energy() const {
   if (!may_meet_ || ns_ == 0 || cur_.size == 0) return 0.0;
   return contact_energy<D>(cur_, slaves_, ns_, law);
+}
+
+template <int D>
+void ContactSystem<D>::save_state(StateArrays& s) const {
+  const std::pair<int, int> used(0, cur_.size);
+  s.put_int("contact/pair_count", cur_.size);
+  save_view(s, "contact/pair_off", cur_.off);
+  if (cur_.size > 0) {
+    save_view(s, "contact/pair_face", Kokkos::subview(cur_.face, used));
+    save_view(s, "contact/pair_fn", Kokkos::subview(cur_.fn, used));
+    save_view(s, "contact/pair_ac", Kokkos::subview(cur_.ac, used));
+    save_view(s, "contact/pair_fs", Kokkos::subview(cur_.fs, used, Kokkos::ALL));
+  } else {
+    s.i64["contact/pair_face"] = {};
+    for (const char* n : {"contact/pair_fn", "contact/pair_ac", "contact/pair_fs"}) s.f64[n] = {};
+  }
+  save_view(s, "contact/xb", xb_);
+  save_view(s, "contact/node_area", surf_.narea);
+  s.put_int("contact/may_meet", may_meet_);
+  s.put_int("contact/need_build", need_build_);
+  s.put_int("contact/since_check", since_check_);
+  s.put_int("contact/active", active_);
+  s.put_int("contact/builds", builds_);
+  s.put_int("contact/handed_over", handed_);
+  s.put("contact/dissipated", dissipated_);
+  // for people reading the file (not read back)
+  s.put_int("contact/surface_nodes", ns_);
+  s.put_int("contact/active_faces", na_);
+}
+
+template <int D>
+void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
+  refresh_surfaces(m);  // active faces, clusters, surface nodes from m.icontact
+  const long long n = s.get_int("contact/pair_count");
+  if (n < 0 || n > std::numeric_limits<int>::max())
+    throw InputError("checkpoint '" + s.file + "': contact/pair_count out of range");
+  const int size = static_cast<int>(n);
+  load_view(s, "contact/pair_off", cur_.off);
+  const int cap = std::max(size, 1);
+  cur_.face = Kokkos::View<int*>("fdem::contact::pair_face", cap);
+  cur_.fn = Kokkos::View<double*>("fdem::contact::pair_fn", cap);
+  cur_.ac = Kokkos::View<double*>("fdem::contact::pair_ac", cap);
+  cur_.fs = Kokkos::View<double* [D]>("fdem::contact::pair_fs", cap);
+  cur_.capacity = cap;
+  cur_.size = size;
+  const std::pair<int, int> used(0, size);
+  load_view(s, "contact/pair_face", Kokkos::subview(cur_.face, used));
+  load_view(s, "contact/pair_fn", Kokkos::subview(cur_.fn, used));
+  load_view(s, "contact/pair_ac", Kokkos::subview(cur_.ac, used));
+  load_view(s, "contact/pair_fs", Kokkos::subview(cur_.fs, used, Kokkos::ALL));
+  {  // the list must be one the search could have built: offsets rising to size, faces in range
+    auto off = Kokkos::create_mirror_view(cur_.off);
+    Kokkos::deep_copy(off, cur_.off);
+    auto face = Kokkos::create_mirror_view(cur_.face);
+    Kokkos::deep_copy(face, cur_.face);
+    bool ok = off(0) == 0 && off(nn_) == size;
+    for (int i = 0; i < nn_ && ok; ++i) ok = off(i) <= off(i + 1);
+    for (int j = 0; j < size && ok; ++j) ok = face(j) >= 0 && face(j) < nf_;
+    if (!ok) throw InputError("checkpoint '" + s.file + "': contact pair list is inconsistent");
+  }
+  scratch_.g = Kokkos::View<double*>("fdem::contact::scratch_g", cap);
+  scratch_.phi = Kokkos::View<double*>("fdem::contact::scratch_phi", cap);
+  scratch_.n = Kokkos::View<double* [D]>("fdem::contact::scratch_n", cap);
+  load_view(s, "contact/xb", xb_);
+  load_view(s, "contact/node_area", surf_.narea);
+  may_meet_ = s.get_int("contact/may_meet") != 0;
+  need_build_ = s.get_int("contact/need_build") != 0;
+  since_check_ = static_cast<int>(s.get_int("contact/since_check"));
+  active_ = static_cast<int>(s.get_int("contact/active"));
+  builds_ = s.get_int("contact/builds");
+  handed_ = s.get_int("contact/handed_over");
+  dissipated_ = s.get("contact/dissipated");
 }
 
 template class ContactSystem<2>;

@@ -20,6 +20,7 @@
 
 #include "../../kernels/contact.hpp"  // the device kernels (a plain "contact.hpp" is this file)
 #include "io/case.hpp"
+#include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
 #include "model.hpp"
 
@@ -68,6 +69,12 @@ class ContactSystem {
   const PairList<D>& pairs() const { return cur_; }
   const Kokkos::View<int*>& surface_node_list() const { return slaves_; }
   const ContactSurface<D>& surface() const { return surf_; }
+
+  // Checkpoint: everything that changes during a run (pair lists with their history, positions at
+  // the last build, node contact areas, counters), under "contact/". load_state needs the model's
+  // interface handover flags (m.icontact) loaded first: it recomputes the surfaces from them.
+  void save_state(StateArrays& s) const;
+  void load_state(const StateArrays& s, const Model<D>& m);
 
   // Internal steps (public only because CUDA lambdas may not sit in private member functions):
   // recompute active faces, clusters and surface nodes; rebuild the grid and candidate lists.

@@ -12,6 +12,7 @@
 
 #include "common/error.hpp"
 #include "io/case.hpp"
+#include "io/checkpoint.hpp"
 #include "io/output.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/fragment_analysis.hpp"
@@ -50,7 +51,9 @@ std::string fmt_time(double s) {
 // Progress: a line rewritten in place on a terminal; on a log, a line every 10 % or 60 s.
 class Progress {
  public:
-  explicit Progress(bool on) : on_(on), tty_(isatty(fileno(stderr))), start_(Clock::now()) {}
+  // step0, t0: where this process started (a restart goes on from there)
+  Progress(bool on, long step0, double t0)
+      : on_(on), tty_(isatty(fileno(stderr))), start_(Clock::now()), step0_(step0), t0_(t0) {}
   void update(long step, double t, double end_time, bool force = false) {
     if (!on_) return;
     const auto now = Clock::now();
@@ -62,8 +65,9 @@ class Progress {
     if (!due && !force) return;
     last_ = now;
     last_decile_ = decile;
-    const double rate = wall > 0 ? step / wall : 0;
-    const double eta = frac > 0 ? wall * (1 - frac) / frac : NAN;
+    const double rate = wall > 0 ? (step - step0_) / wall : 0;
+    const double done = end_time > 0 ? (t - t0_) / end_time : 0;
+    const double eta = done > 0 ? wall * (1 - frac) / done : NAN;
     std::fprintf(stderr, "%sstep %ld  t = %.4e s (%5.1f %%)  %.3g steps/s  elapsed %s  left %s%s",
                  tty_ ? "\r" : "", step, t, 100 * frac, rate, fmt_time(wall).c_str(),
                  fmt_time(eta).c_str(), tty_ ? "   " : "\n");
@@ -77,6 +81,8 @@ class Progress {
   bool on_, tty_;
   Clock::time_point start_, last_{};
   int last_decile_ = -1;
+  long step0_;
+  double t0_;
 };
 
 nlohmann::json mesh_report(const HostMesh& mesh) {
@@ -100,11 +106,17 @@ nlohmann::json stable_report(const Simulation<D>& sim) {
           {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
 }
 
+// What identifies a run for a restart (checkpoint header).
+struct RunIdentity {
+  std::string case_hash, mesh_hash;
+};
+
 template <int D>
 nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out,
-                       const RunOptions& opt) {
+                       const RunOptions& opt, const RunIdentity& id, const StateArrays* restart) {
   const auto wall0 = Clock::now();
   Simulation<D> sim(c, mesh);
+  if (restart) sim.load_state(*restart);
   const int np = sim.m.platens.count;
   const char* axes[3] = {"x", "y", "z"};
 
@@ -136,7 +148,14 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
                         "D_fracture [J]", "D_damping [J]", "D_friction [J]", "W_external [J]",
                         "energy_error [J]", "interfaces_damaged", "interfaces_failed"})
     cols.push_back(e);
-  HistoryWriter history(out + "/history.csv", cols);
+  // ---- run-loop state (saved in checkpoints) ----
+  const double hist_dt = c.history_interval > 0 ? c.history_interval : c.end_time / 200;
+  const double ckpt_dt = opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every;
+  double next_hist = 0, next_snap = c.snapshot_interval, next_ckpt = ckpt_dt;
+  std::vector<double> peak(np, 0.0), peak_disp(np, 0.0);
+  double max_rel_error = 0;
+  Energies last{};
+  bool last_was_row = false;
 
   // Fragments (runs with interfaces): fragments.csv at every history row, ids in the snapshots.
   std::unique_ptr<FragmentAnalysis<D>> frag;
@@ -158,11 +177,59 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     return frag->last();
   };
 
+  long last_snap_step = -1;
+  std::vector<double> rows;  // every history row so far (row-major), for checkpoints
+  double prior_wall = 0, prior_loop_wall = 0, ckpt_wall = 0;
+  long ckpt_written = 0;
+  std::vector<long> snap_steps;
+  std::vector<double> snap_times;
+  if (restart) {
+    const StateArrays& R = *restart;
+    std::string joined;
+    for (const auto& col : cols) joined += col + "\n";
+    if (R.string("run/history_columns") != joined)
+      throw InputError("restart file '" + R.file + "': its history columns differ from this case's");
+    next_hist = R.get("run/next_history");
+    next_snap = R.get("run/next_snapshot");
+    if (ckpt_dt > 0) {  // the next checkpoint after the restart point
+      next_ckpt = R.get("run/next_checkpoint");
+      if (!(next_ckpt > 0) || R.get("run/checkpoint_every") != ckpt_dt) {
+        next_ckpt = ckpt_dt * std::floor(sim.t / ckpt_dt);
+        while (next_ckpt <= sim.t * (1 + 1e-12)) next_ckpt += ckpt_dt;
+      }
+    }
+    peak = R.array("run/peak_load", np);
+    peak_disp = R.array("run/peak_displacement", np);
+    max_rel_error = R.get("run/max_relative_balance_error");
+    last = energies_from_vector(R.array("run/last_row_energies", kEnergyFieldCount));
+    last_was_row = R.get_int("run/last_was_row") != 0;
+    last_snap_step = static_cast<long>(R.get_int("run/last_snapshot_step"));
+    rows = R.array("run/history_rows");
+    if (rows.size() % cols.size() != 0)
+      throw InputError("restart file '" + R.file + "': history rows do not fit the columns");
+    prior_wall = R.get("run/wall_seconds");
+    prior_loop_wall = R.get("run/loop_wall_seconds");
+    ckpt_wall = R.get("run/checkpoint_seconds");
+    ckpt_written = static_cast<long>(R.get_int("run/checkpoints_written"));
+    for (long long st : R.int_array("run/snapshot_steps")) snap_steps.push_back(static_cast<long>(st));
+    snap_times = R.array("run/snapshot_times", static_cast<long long>(snap_steps.size()));
+  }
+
+  std::unique_ptr<HistoryWriter> history =
+      restart ? std::make_unique<HistoryWriter>(out + "/history.csv", cols, rows)
+              : std::make_unique<HistoryWriter>(out + "/history.csv", cols);
   std::unique_ptr<SnapshotWriter> snaps;
-  if (c.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(out, mesh);
+  if (c.snapshot_interval > 0) {
+    if (restart) {
+      std::string note;
+      snaps = std::make_unique<SnapshotWriter>(out, mesh, snap_steps, snap_times, note);
+      if (!note.empty()) std::fprintf(stderr, "fdem: warning: %s\n", note.c_str());
+    } else {
+      snaps = std::make_unique<SnapshotWriter>(out, mesh);
+    }
+  }
   std::vector<double> sx, su, sv, ss, sd;
   std::vector<int> sfrag;
-  long last_snap_step = -1;
   auto snapshot = [&]() {
     if (!snaps || sim.step_count == last_snap_step) return;
     last_snap_step = sim.step_count;
@@ -183,11 +250,6 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     snaps->write(fr);
   };
 
-  const double hist_dt = c.history_interval > 0 ? c.history_interval : c.end_time / 200;
-  double next_hist = 0, next_snap = 0;
-  std::vector<double> peak(np, 0.0), peak_disp(np, 0.0);
-  double max_rel_error = 0;
-  Energies last{};
   std::string stop_reason = "end_time";
   int stop_platen = -1;
   for (int p = 0; p < np; ++p)
@@ -225,7 +287,8 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
                      last.balance_error, static_cast<double>(last.damaged),
                      static_cast<double>(last.failed)})
       row.push_back(e);
-    history.row(row);
+    history->row(row);
+    rows.insert(rows.end(), row.begin(), row.end());
     if (frag) {  // the interface history is that of x(n), the instant of the row
       const FragmentStats& fs = fragments_now();
       std::vector<double> fr = {last.time, static_cast<double>(last.step), double(fs.count),
@@ -241,17 +304,68 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
 
   auto check = [&]() { sim.check_stability(); };
 
-  Progress progress(opt.progress);
+  Progress progress(opt.progress, sim.step_count, sim.t);
   if (opt.progress) {
     std::fprintf(stderr, "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); %.0f steps to end_time\n",
                  c.name.c_str(), sim.m.nn, sim.m.ne, sim.m.ni, sim.dt, sim.dt / sim.stable.critical,
                  sim.stable.critical, std::ceil(c.end_time / sim.dt));
   }
-  snapshot();
-  next_snap = c.snapshot_interval;
-  next_hist = 0;
-  bool last_was_row = false;
-  const auto loop0 = Clock::now();
+  const std::string ckpt_path = out + "/checkpoint.h5";
+  auto loop0 = Clock::now();
+  auto write_ckpt = [&]() {
+    const auto c0 = Clock::now();
+    StateArrays st;
+    sim.save_state(st);
+    std::string joined;
+    for (const auto& col : cols) joined += col + "\n";
+    st.str["run/history_columns"] = joined;
+    st.f64["run/history_rows"] = rows;
+    st.put("run/next_history", next_hist);
+    st.put("run/next_snapshot", next_snap);
+    st.put("run/next_checkpoint", next_ckpt);
+    st.put("run/checkpoint_every", ckpt_dt);
+    st.f64["run/peak_load"] = peak;
+    st.f64["run/peak_displacement"] = peak_disp;
+    st.put("run/max_relative_balance_error", max_rel_error);
+    st.f64["run/last_row_energies"] = energies_to_vector(last);
+    st.put_int("run/last_was_row", last_was_row);
+    st.put_int("run/last_snapshot_step", last_snap_step);
+    std::vector<long long> ss;
+    std::vector<double> stimes;
+    if (snaps) {
+      for (long x : snaps->steps()) ss.push_back(x);
+      stimes = snaps->times();
+    }
+    st.i64["run/snapshot_steps"] = ss;
+    st.f64["run/snapshot_times"] = stimes;
+    const double now = std::chrono::duration<double>(c0 - wall0).count();
+    st.put("run/wall_seconds", prior_wall + now);
+    st.put("run/loop_wall_seconds", prior_loop_wall + std::chrono::duration<double>(c0 - loop0).count());
+    st.put("run/checkpoint_seconds", ckpt_wall);
+    st.put_int("run/checkpoints_written", ckpt_written + 1);
+    CheckpointHeader h;
+    h.dim = D;
+    h.nodes = sim.m.nn;
+    h.elements = sim.m.ne;
+    h.interfaces = sim.m.ni;
+    h.case_hash = id.case_hash;
+    h.mesh_hash = id.mesh_hash;
+    h.time = sim.t;
+    h.step = sim.step_count;
+    write_checkpoint(ckpt_path, h, st);
+    ++ckpt_written;
+    ckpt_wall += std::chrono::duration<double>(Clock::now() - c0).count();
+  };
+
+  if (restart) {
+    if (opt.progress)
+      std::fprintf(stderr, "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
+                   restart->file.c_str(), sim.step_count, sim.t, rows.size() / cols.size(),
+                   snaps ? snaps->frames() : 0);
+  } else {
+    snapshot();
+  }
+  loop0 = Clock::now();
   while (sim.t < c.end_time * (1 - 1e-12)) {
     if (c.max_steps > 0 && sim.step_count >= c.max_steps) {
       stop_reason = "max_steps";
@@ -276,9 +390,13 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
       snapshot();
       next_snap += c.snapshot_interval;
     }
+    if (ckpt_dt > 0 && sim.t >= next_ckpt * (1 - 1e-12)) {
+      while (next_ckpt <= sim.t * (1 + 1e-12)) next_ckpt += ckpt_dt;
+      write_ckpt();
+    }
     progress.update(sim.step_count, sim.t, c.end_time);
   }
-  const double loop_wall = std::chrono::duration<double>(Clock::now() - loop0).count();
+  const double loop_wall = prior_loop_wall + std::chrono::duration<double>(Clock::now() - loop0).count();
   progress.update(sim.step_count, sim.t, c.end_time, true);
   progress.done();
   if (!last_was_row) {  // a final row: one more sampled step
@@ -298,7 +416,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   summary["steps"] = sim.step_count;
   summary["end_time_s"] = sim.t;
   summary["stop_reason"] = stop_reason;
-  summary["wall_seconds"] = std::chrono::duration<double>(Clock::now() - wall0).count();
+  summary["wall_seconds"] = prior_wall + std::chrono::duration<double>(Clock::now() - wall0).count();
   summary["loop_wall_seconds"] = loop_wall;
   summary["element_steps_per_second"] = loop_wall > 0 ? sim.step_count * double(sim.m.ne) / loop_wall : 0;
   summary["energy"] = {{"kinetic_J", last.kinetic},
@@ -349,6 +467,15 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     }
   }
   summary["results"] = results;
+  if (ckpt_dt > 0 || restart) {
+    nlohmann::json ck = {{"file", ckpt_path}, {"every_s", ckpt_dt}, {"written", ckpt_written},
+                         {"write_seconds", ckpt_wall}};
+    if (restart)
+      ck["restarted_from"] = {{"file", restart->file},
+                              {"step", restart->get_int("simulation/step")},
+                              {"time_s", restart->get("simulation/time")}};
+    summary["checkpoint"] = ck;
+  }
   summary["outputs"] = {{"history", out + "/history.csv"},
                         {"summary", out + "/summary.json"},
                         {"case", out + "/case.json"}};
@@ -369,13 +496,70 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
 
 }  // namespace
 
+namespace {
+
+// The resolved case without the keys that do not change the results: the checkpoint interval,
+// and the mesh file's path (its content is in the mesh hash; the project folder may move).
+std::string case_hash(const Case& c) {
+  nlohmann::json r = c.resolved;
+  if (r.contains("output") && r["output"].is_object()) r["output"].erase("checkpoint_every");
+  if (r.contains("mesh") && r["mesh"].is_object() && r["mesh"].contains("file")) r["mesh"]["file"] = "";
+  const std::string text = r.dump();
+  return hash_hex(text.data(), text.size());
+}
+
+std::string mesh_hash(const HostMesh& mesh) {
+  uint64_t h = fnv1a(mesh.X.data(), mesh.X.size() * sizeof(double));
+  h = fnv1a(mesh.elems.data(), mesh.elems.size() * sizeof(int), h);
+  h = fnv1a(mesh.ifaces.data(), mesh.ifaces.size() * sizeof(int), h);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+// A restart file must come from this case (same file, same --set options) and this mesh.
+void check_restart_matches(const std::string& file, const CheckpointHeader& h, const Case& c,
+                           const HostMesh& mesh, const RunIdentity& id) {
+  std::string diff;
+  auto cmp = [&](const char* what, long long have, long long want) {
+    if (have != want)
+      diff += std::string(diff.empty() ? "" : "; ") + what + " " + std::to_string(have) +
+              " (this case: " + std::to_string(want) + ")";
+  };
+  cmp("dimension", h.dim, c.dim);
+  cmp("nodes", h.nodes, mesh.num_nodes());
+  cmp("elements", h.elements, mesh.num_elems());
+  cmp("interfaces", h.interfaces, mesh.num_ifaces());
+  if (diff.empty() && h.mesh_hash != id.mesh_hash) diff = "the mesh coordinates or connectivity differ";
+  if (diff.empty() && h.case_hash != id.case_hash)
+    diff = "the case differs (give the same case file and the same --set options as the run that "
+           "wrote it; only the checkpoint interval may change)";
+  if (!diff.empty())
+    throw InputError("restart file '" + file + "' is a checkpoint of another case or mesh: " + diff);
+}
+
+}  // namespace
+
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   const Case c = load_case(case_path, opt.overrides);
+  if (opt.checkpoint_every >= 0 && !std::isfinite(opt.checkpoint_every))
+    throw InputError("--checkpoint-every must be a finite time in seconds");
+  StateArrays restart;
+  CheckpointHeader header;
+  if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   ensure_output_dir(out);
-  write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  // (a restart checks the case against the checkpoint before it touches the folder's case.json)
+  if (opt.restart.empty()) write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
   const HostMesh mesh = prepare_mesh(c);
-  return c.dim == 2 ? run_dim<2>(c, mesh, out, opt) : run_dim<3>(c, mesh, out, opt);
+  const RunIdentity id{case_hash(c), mesh_hash(mesh)};
+  const StateArrays* r = nullptr;
+  if (!opt.restart.empty()) {
+    check_restart_matches(opt.restart, header, c, mesh, id);
+    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+    r = &restart;
+  }
+  return c.dim == 2 ? run_dim<2>(c, mesh, out, opt, id, r) : run_dim<3>(c, mesh, out, opt, id, r);
 }
 
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides) {

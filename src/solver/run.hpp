@@ -11,10 +11,17 @@ struct RunOptions {
   std::string out_dir;                // default: ./out/<case name>
   std::vector<std::string> overrides;  // --set key.path=value
   bool progress = true;               // progress line on a terminal / periodic lines in logs
+  double checkpoint_every = -1;       // s of simulated time; < 0: the case's output.checkpoint_every
+  std::string restart;                // checkpoint to go on from (same case and --set options)
 };
 
-// Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input)
-// or NumericalError (instability), both with a clear message.
+// Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,
+// a restart file that is missing, damaged or of another case, an output file that cannot be
+// written) or NumericalError (instability), both with a clear message.
+// With a checkpoint interval the run writes out_dir/checkpoint.h5 (atomically) every that much
+// simulated time; with `restart` it goes on from such a file: history.csv keeps the rows up to the
+// checkpoint (rewritten from the checkpoint), snapshots.h5 keeps the frames up to it, and the run
+// gives the same results as one that did not stop.
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt);
 
 // Validates a case file and its mesh without running it; returns a short report (counts, mesh

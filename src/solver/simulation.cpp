@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "solver/state_io.hpp"
 
 namespace fdem {
 
@@ -560,6 +561,86 @@ void Simulation<D>::download(std::vector<double>& x, std::vector<double>& u, std
   auto d_h = Kokkos::create_mirror_view(d);
   Kokkos::deep_copy(d_h, d);
   damage.assign(d_h.data(), d_h.data() + m.ni);
+}
+
+std::vector<double> energies_to_vector(const Energies& e) {
+  return {e.time, static_cast<double>(e.step), e.kinetic, e.strain, e.interface_elastic,
+          e.contact_elastic, e.fracture, e.damping, e.friction, e.work_external, e.balance_error,
+          e.scale, static_cast<double>(e.damaged), static_cast<double>(e.failed)};
+}
+Energies energies_from_vector(const std::vector<double>& v) {
+  Energies e;
+  e.time = v[0];
+  e.step = static_cast<long>(v[1]);
+  e.kinetic = v[2];
+  e.strain = v[3];
+  e.interface_elastic = v[4];
+  e.contact_elastic = v[5];
+  e.fracture = v[6];
+  e.damping = v[7];
+  e.friction = v[8];
+  e.work_external = v[9];
+  e.balance_error = v[10];
+  e.scale = v[11];
+  e.damaged = static_cast<long>(v[12]);
+  e.failed = static_cast<long>(v[13]);
+  return e;
+}
+
+template <int D>
+void Simulation<D>::save_state(StateArrays& s) const {
+  s.put("simulation/time", t);
+  s.put("simulation/dt", dt);
+  s.put_int("simulation/step", step_count);
+  s.put("simulation/work_damping", work_damping_);
+  s.put("simulation/work_bc", work_bc_);
+  s.put("simulation/energy_reference", reference_);
+  s.put_int("simulation/have_reference", have_reference_);
+  s.f64["simulation/energies"] = energies_to_vector(energies_);
+  s.f64["simulation/damping"] = {prm_.alpha, prm_.cmass};
+  s.f64["model/cohesive"] = {m.coh.kn, m.coh.ks, m.coh.ft, m.coh.c, m.coh.tanphi, m.coh.Gnc, m.coh.Gsc, m.coh.eta};
+  save_view(s, "model/x", m.x);
+  save_view(s, "model/v", m.v);
+  save_view(s, "model/f", m.f);
+  save_view(s, "model/ihist", m.ihist);
+  save_view(s, "model/icontact", m.icontact);
+  if (m.icontact_pending.data()) save_view(s, "model/icontact_pending", m.icontact_pending);
+  save_view(s, "model/platen_fs", m.platen_fs);
+  save_view(s, "model/platen_acc", m.platen_acc);
+  if (contact_) contact_->save_state(s);
+}
+
+template <int D>
+void Simulation<D>::load_state(const StateArrays& s) {
+  const double saved_dt = s.get("simulation/dt");
+  if (saved_dt != dt)
+    throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
+                     " s differs from this case's " + std::to_string(dt) + " s");
+  t = s.get("simulation/time");
+  step_count = static_cast<long>(s.get_int("simulation/step"));
+  work_damping_ = s.get("simulation/work_damping");
+  work_bc_ = s.get("simulation/work_bc");
+  reference_ = s.get("simulation/energy_reference");
+  have_reference_ = s.get_int("simulation/have_reference") != 0;
+  energies_ = energies_from_vector(s.array("simulation/energies", kEnergyFieldCount));
+  const auto& damp = s.array("simulation/damping", 2);
+  prm_.alpha = damp[0];
+  prm_.cmass = damp[1];
+  const auto& ch = s.array("model/cohesive", 8);
+  m.coh = CohesiveParams{ch[0], ch[1], ch[2], ch[3], ch[4], ch[5], ch[6], ch[7]};
+  load_view(s, "model/x", m.x);
+  load_view(s, "model/v", m.v);
+  load_view(s, "model/f", m.f);
+  load_view(s, "model/ihist", m.ihist);
+  load_view(s, "model/icontact", m.icontact);
+  if (m.icontact_pending.data()) load_view(s, "model/icontact_pending", m.icontact_pending);
+  load_view(s, "model/platen_fs", m.platen_fs);
+  load_view(s, "model/platen_acc", m.platen_acc);
+  if (contact_ && !s.has("contact/pair_count"))
+    throw InputError("checkpoint '" + s.file + "' has no contact state but this case has contact");
+  if (!contact_ && s.has("contact/pair_count"))
+    throw InputError("checkpoint '" + s.file + "' has contact state but this case has no contact");
+  if (contact_) contact_->load_state(s, m);
 }
 
 template class Simulation<2>;

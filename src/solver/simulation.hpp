@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/case.hpp"
+#include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
 #include "model.hpp"
 #include "solver/contact.hpp"
@@ -26,6 +27,11 @@ struct Energies {
   long damaged = 0, failed = 0;
   double momentum[3] = {0, 0, 0};  // total linear momentum sum m v at `time` (N s)
 };
+
+// Energies as a flat array (checkpoints): kEnergyFieldCount values.
+constexpr int kEnergyFieldCount = 14;
+std::vector<double> energies_to_vector(const Energies& e);
+Energies energies_from_vector(const std::vector<double>& v);
 
 struct StableStep {
   double bulk = 0;       // min over elements of altitude / P-wave speed
@@ -84,6 +90,14 @@ class Simulation {
     m.coh.c = coh0_.c / factor;
     m.coh.tanphi = coh0_.tanphi / factor;
   }
+
+  // Checkpoint: everything in the model and this object that changes during a run (time, step,
+  // positions, velocities, forces, interface history and handover flags, platen springs and
+  // accumulators, damping and strength parameters, energy accumulators and reference, the last
+  // sampled energies, and the contact system), under "simulation/", "model/" and "contact/".
+  // load_state checks the sizes and throws InputError naming the checkpoint file.
+  void save_state(StateArrays& s) const;
+  void load_state(const StateArrays& s);
 
   const std::vector<std::string>& platen_names() const { return platen_names_; }
   const std::vector<std::string>& bc_names() const { return bc_names_; }

@@ -1,0 +1,63 @@
+#pragma once
+// Checkpoint files (HDF5): the complete state of a run, so that `fdem run --restart FILE` goes on
+// exactly as if the run had not stopped. The solver puts its state into a StateArrays (named flat
+// arrays of doubles, integers and strings); this file writes and reads them, atomically.
+//
+// checkpoint.h5 layout:
+//   /  attributes: format = "fdem checkpoint", version (int32), dimension, num_nodes, num_elements,
+//      num_interfaces (int64), case_hash, mesh_hash (strings, 16 hex digits), time (float64),
+//      step (int64)
+//   one dataset per state entry, at its name ("model/x", "contact/pair_fn", "run/next_history",
+//   ...): float64 or int64, one-dimensional; strings as fixed-length string scalars.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace fdem {
+
+struct StateArrays {
+  std::map<std::string, std::vector<double>> f64;
+  std::map<std::string, std::vector<long long>> i64;
+  std::map<std::string, std::string> str;
+
+  void put(const std::string& name, double v) { f64[name] = {v}; }
+  void put_int(const std::string& name, long long v) { i64[name] = {v}; }
+  // Read back; throw InputError naming `file` when the entry is missing or has another size
+  // (expected < 0: any size).
+  double get(const std::string& name) const;
+  long long get_int(const std::string& name) const;
+  const std::vector<double>& array(const std::string& name, long long expected = -1) const;
+  const std::vector<long long>& int_array(const std::string& name, long long expected = -1) const;
+  const std::string& string(const std::string& name) const;
+  bool has(const std::string& name) const {
+    return f64.count(name) || i64.count(name) || str.count(name);
+  }
+
+  std::string file;  // for messages
+};
+
+struct CheckpointHeader {
+  int dim = 0;
+  long long nodes = 0, elements = 0, interfaces = 0;
+  std::string case_hash, mesh_hash;
+  double time = 0;
+  long long step = 0;
+};
+
+// FNV-1a 64-bit hash as 16 hex digits.
+std::string hash_hex(const void* data, size_t bytes, uint64_t seed = 1469598103934665603ull);
+uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 1469598103934665603ull);
+
+// Writes `path` atomically: to `path`.tmp in the same folder, fsync, rename over `path`, fsync the
+// folder. Until the rename the previous file at `path` stays as it was. Throws InputError naming
+// the file (full disk, unwritable folder). Test hook: the environment variable
+// FDEM_TEST_CHECKPOINT_KILL = "during:N" or "after:N" kills the process (SIGKILL) in the middle of
+// writing the N-th checkpoint of this process (half of the datasets written) or right after it.
+void write_checkpoint(const std::string& path, const CheckpointHeader& h, const StateArrays& s);
+
+// Reads a checkpoint. Throws InputError naming `path` when it is missing, not HDF5 or not a
+// checkpoint of this format.
+StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h);
+
+}  // namespace fdem
