@@ -349,7 +349,8 @@ double model_bytes(const Model<D>& m) {
 struct Counts {
   double nn = 0, ne = 0, ni = 0;
   double nn_elem = 0, nn_iface = 0;  // distinct nodes of the elements, of the interfaces
-  double T = 1;                      // scatter copies (1: atomics or serial)
+  double T = 1;                      // scatter copies (duplicated scatter: one per thread)
+  bool dup = false;                  // duplicated scatter (reset and contribute passes)
   bool handover = false, fext = false;
 };
 
@@ -366,7 +367,8 @@ Counts counts(const HostMesh& mesh, const Simulation<D>& sim) {
     c.nn_elem += a[i];
     c.nn_iface += b[i];
   }
-  c.T = scatter_duplicated() ? threads() : 1;
+  c.dup = scatter_duplicated();
+  c.T = c.dup ? threads() : 1;
   c.handover = sim.m.icontact.extent(0) > 0;
   c.fext = sim.m.fext.extent(0) > 0;
   return c;
@@ -383,7 +385,7 @@ Traffic traffic(const Counts& c, int D) {
   Traffic t;
   t.bulk = c.ne * ((D + 1) * 4.0 + D * D * 8.0 + 8.0 + 4.0) + c.nn_elem * vec * (1 + 2);
   t.iface = c.ni * (2 * D * 4.0 + D * 4 * 8.0 * 2 + 8.0 + (c.handover ? 4.0 : 0.0)) + c.nn_iface * vec * (1 + 2);
-  if (c.T > 1) {
+  if (c.dup) {
     t.reset = c.T * c.nn * vec;
     t.contribute = c.T * c.nn * vec + 2 * c.nn * vec;
   }

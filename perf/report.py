@@ -280,18 +280,15 @@ class Report:
             f = k["step"]["fraction_of_triad"]
             ok = f >= BANDWIDTH_TARGET
             short = []
-            if not ok:
-                for n, x in k.items():
-                    if x["bytes"] > 0 and not x["derived"] and n not in ("step", "step_sampled"):
-                        share = x["ns_median"] / k["step"]["ns_median"]
-                        if x["fraction_of_triad"] < BANDWIDTH_TARGET and n in ("forces", "nodes", "scatter_reset",
-                                                                              "scatter_contribute"):
-                            short.append(f"{n} {100 * x['fraction_of_triad']:.0f} % of triad, "
-                                         f"{100 * share:.0f} % of the step")
-                fc = k.get("forces_compute")
-                if fc:
-                    short.append(f"forces_compute {100 * fc['fraction_of_triad']:.0f} % of triad, "
-                                 f"{100 * fc['ns_median'] / k['step']['ns_median']:.0f} % of the step")
+            if not ok:  # the parts of the step: their bandwidth and their share of the step's time
+                parts = []
+                for n in ("forces_compute", "scatter_reset", "scatter_contribute", "nodes", "contact"):
+                    x = k.get(n)
+                    if x:
+                        parts.append((x["ns_median"] / k["step"]["ns_median"], n, x))
+                for share, n, x in sorted(parts, key=lambda p: p[0], reverse=True):
+                    bw = f"{100 * x['fraction_of_triad']:.0f} % of triad" if x["bytes"] > 0 else "no traffic modelled"
+                    short.append(f"{n}: {bw}, {100 * share:.0f} % of the step's time")
             self.checks.append((f"bandwidth {dim}D", ok, f"{100 * f:.0f} % of triad"))
             rows.append([f"{dim}D", fmt(r["elements"]), f"{k['step']['bytes_per_element']:.0f}",
                          f"{k['step']['GBps']:.1f}", f"{100 * f:.0f} %",
