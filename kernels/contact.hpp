@@ -695,7 +695,10 @@ struct ContactSums {
 // tension), incremental shear spring with Coulomb friction and cohesion; forces added with
 // atomics to the node and, through the contact point's barycentric weights, to the face's nodes;
 // history updated. A contact that ends releases the energy of its shear spring (dissipated).
-template <int D>
+// Fric = false: frictionless contact (mu = 0 and no cohesion): the shear force is zero, so the
+// shear spring is neither computed nor stored (its history stays zero; see ContactSystem::update
+// for the switch from friction to none).
+template <int D, bool Fric = true>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
                                          const Kokkos::View<double* [D]>& x, const Kokkos::View<double* [D]>& v,
                                          const Kokkos::View<double* [D]>& f, const Kokkos::View<double*>& pfn,
@@ -725,35 +728,39 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
     nsum += Nc[q];
   }
   for (int q = 0; q < D; ++q) Nc[q] /= nsum;
-  // relative displacement of the node against the contact point over the last step
-  double fs0[D], du[D], dun = 0, fsn = 0;
-  const bool was = pfn(j) > 0.0;
-  for (int k = 0; k < D; ++k) {
-    double vf = 0;
-    for (int q = 0; q < D; ++q) vf += Nc[q] * v(S.fnode(fc, q), k);
-    du[k] = (vs[k] - vf) * dt;
-    dun += du[k] * n[k];
-    fs0[k] = was ? pfs(j, k) : 0.0;
-    fsn += fs0[k] * n[k];
-  }
   const double Fn = -L.kn * A * g;
-  double Fs[D], Fs2 = 0;
-  for (int k = 0; k < D; ++k) {
-    Fs[k] = fs0[k] - fsn * n[k] - L.ks * A * (du[k] - dun * n[k]);
-    Fs2 += Fs[k] * Fs[k];
-  }
-  const double lim = L.mu * Fn + L.coh * A;
-  const double Fsm = kmath::sqrt(Fs2);
-  if (Fsm > lim) {
-    const double r = Fsm > 0 ? lim / Fsm : 0.0;
-    for (int k = 0; k < D; ++k) Fs[k] *= r;
-    sums.dissipated += lim * (Fsm - lim) / (L.ks * A);
+  double Fs[D];
+  for (int k = 0; k < D; ++k) Fs[k] = 0.0;
+  if constexpr (Fric) {
+    // relative displacement of the node against the contact point over the last step
+    double fs0[D], du[D], dun = 0, fsn = 0;
+    const bool was = pfn(j) > 0.0;
+    for (int k = 0; k < D; ++k) {
+      double vf = 0;
+      for (int q = 0; q < D; ++q) vf += Nc[q] * v(S.fnode(fc, q), k);
+      du[k] = (vs[k] - vf) * dt;
+      dun += du[k] * n[k];
+      fs0[k] = was ? pfs(j, k) : 0.0;
+      fsn += fs0[k] * n[k];
+    }
+    double Fs2 = 0;
+    for (int k = 0; k < D; ++k) {
+      Fs[k] = fs0[k] - fsn * n[k] - L.ks * A * (du[k] - dun * n[k]);
+      Fs2 += Fs[k] * Fs[k];
+    }
+    const double lim = L.mu * Fn + L.coh * A;
+    const double Fsm = kmath::sqrt(Fs2);
+    if (Fsm > lim) {
+      const double r = Fsm > 0 ? lim / Fsm : 0.0;
+      for (int k = 0; k < D; ++k) Fs[k] *= r;
+      sums.dissipated += lim * (Fsm - lim) / (L.ks * A);
+    }
   }
   for (int k = 0; k < D; ++k) {
     const double Fk = Fn * n[k] + Fs[k];
     Kokkos::atomic_add(&f(s, k), Fk);
     for (int q = 0; q < D; ++q) Kokkos::atomic_add(&f(S.fnode(fc, q), k), -Nc[q] * Fk);
-    pfs(j, k) = Fs[k];
+    if constexpr (Fric) pfs(j, k) = Fs[k];
   }
   pfn(j) = Fn;
   pac(j) = A;
@@ -770,8 +777,8 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
 // pieces), with the effective area A w: A the node's contact area, w the fade at the face's edge
 // (contact_fade), shared among coplanar faces of one piece so that they form a partition of
 // unity where they meet. Both vary continuously with the positions, so contacts begin and end
-// without jumps in the stored energy.
-template <int D>
+// without jumps in the stored energy. Fric: see contact_pair.
+template <int D, bool Fric = true>
 ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np,
                            const PairList<D>& P, const PairScratch<D>& scratch,
                            const ContactSurface<D>& surf, const ContactLaw& law, double dt,
@@ -825,7 +832,7 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
             }
             bool mine = last_d > 0.0 && last_d < L.dpen;
             for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
-            contact_pair<D>(S, L, x, v, f, pfn, pac, pfs, j, s, fc, xs, vs, mine ? Anode : 0.0, dt, sums);
+            contact_pair<D, Fric>(S, L, x, v, f, pfn, pac, pfs, j, s, fc, xs, vs, mine ? Anode : 0.0, dt, sums);
             sphi(j) = -1.0;  // done
             continue;
           }
@@ -863,7 +870,7 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
             }
             w = sphi(j) / (sum > 1.0 ? sum : 1.0);
           }
-          contact_pair<D>(S, L, x, v, f, pfn, pac, pfs, j, s, fc, xs, vs, Anode * w, dt, sums);
+          contact_pair<D, Fric>(S, L, x, v, f, pfn, pac, pfs, j, s, fc, xs, vs, Anode * w, dt, sums);
         }
       },
       out);

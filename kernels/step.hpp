@@ -339,59 +339,83 @@ struct NodeUpdateParams {
 // momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (5, 6, 7; components beyond D stay 0).
 using NodeSums = SumN<8>;
 
-// Central-difference update of all nodes with damping and velocity BCs; zeroes the force for the
+// Central-difference update of one node with damping and velocity BCs; zeroes its force for the
 // next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
 // the kinetic-energy change of a node exactly the work of the forces on it.
-template <int D, bool Sample>
-NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
-  auto x = m.x;
-  auto X = m.X;
-  auto v = m.v;
-  auto f = m.f;
-  auto mass = m.mass;
-  auto node_bc = m.node_bc;
-  auto bcs = m.bcs;
-  auto fext = m.fext;
-  const NodeUpdateParams p = prm;
-  const double th = p.t + 0.5 * p.dt;  // velocities live at half steps
-  NodeSums out;
-  Kokkos::parallel_reduce(
-      "fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-      KOKKOS_LAMBDA(const int i, NodeSums& s) {
-        const double mi = mass(i);
-        const int bc = node_bc(i);
-        for (int k = 0; k < D; ++k) {
-          double F = f(i, k) + mi * p.gravity[k];
-          const double fe = p.has_fext ? fext(i, k) : 0.0;
-          F += fe;
-          const double vo = v(i, k);
-          double vn;
-          if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
-            const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
-            vn = bcs(bc).vel[k] * r;
-            s.v[1] += (mi * (vn - vo) / p.dt - F) * 0.5 * (vo + vn) * p.dt;
-          } else {
-            double fd = -p.cmass * mi * vo;
-            if (p.alpha > 0) {
-              const double fu = F + fd;
-              fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
-            }
-            vn = vo + p.dt * (F + fd) / mi;
-            s.v[0] -= fd * 0.5 * (vo + vn) * p.dt;
-          }
-          if (Sample) {
-            const double u = x(i, k) - X(i, k);
-            s.v[2] += 0.5 * mi * vo * vn;
-            s.v[3] += mi * p.gravity[k] * u;
-            s.v[4] += fe * u;
-            s.v[5 + k] += 0.5 * mi * (vo + vn);
-          }
-          v(i, k) = vn;
-          x(i, k) += p.dt * vn;
-          f(i, k) = 0.0;
+// Damp = false: the scene has no damping (alpha = c = 0): no damping force, no damping work (the
+// results are the same as with Damp = true at zero damping).
+template <int D, bool Sample, bool Damp>
+struct NodeUpdate {
+  Kokkos::View<double* [D]> x, X, v, f, fext;
+  Kokkos::View<double*> mass;
+  Kokkos::View<int*> node_bc;
+  Kokkos::View<BCDev*> bcs;
+  NodeUpdateParams p;
+  double th;  // velocities live at half steps
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, NodeSums& s) const {
+    const double mi = mass(i);
+    const int bc = node_bc(i);
+    for (int k = 0; k < D; ++k) {
+      double F = f(i, k) + mi * p.gravity[k];
+      const double fe = p.has_fext ? fext(i, k) : 0.0;
+      F += fe;
+      const double vo = v(i, k);
+      double vn;
+      if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
+        const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
+        vn = bcs(bc).vel[k] * r;
+        s.v[1] += (mi * (vn - vo) / p.dt - F) * 0.5 * (vo + vn) * p.dt;
+      } else if (Damp) {
+        double fd = -p.cmass * mi * vo;
+        if (p.alpha > 0) {
+          const double fu = F + fd;
+          fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
         }
-      },
-      out);
+        vn = vo + p.dt * (F + fd) / mi;
+        s.v[0] -= fd * 0.5 * (vo + vn) * p.dt;
+      } else {
+        vn = vo + p.dt * F / mi;
+      }
+      if (Sample) {
+        const double u = x(i, k) - X(i, k);
+        s.v[2] += 0.5 * mi * vo * vn;
+        s.v[3] += mi * p.gravity[k] * u;
+        s.v[4] += fe * u;
+        s.v[5 + k] += 0.5 * mi * (vo + vn);
+      }
+      v(i, k) = vn;
+      x(i, k) += p.dt * vn;
+      f(i, k) = 0.0;
+    }
+  }
+};
+
+// The same without sums (an unsampled step of a scene without damping and velocity BCs).
+template <class Update>
+struct NodeUpdateNoSums {
+  Update u;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    NodeSums s;
+    u(i, s);
+  }
+};
+
+// Update of all nodes. The sums are reduced only when there is something to sum: on sampled
+// steps, or when the scene has damping or velocity BCs (their work is accumulated every step);
+// otherwise the pass is a plain parallel_for.
+template <int D, bool Sample, bool Damp>
+NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
+  const NodeUpdate<D, Sample, Damp> fn{m.x, m.X, m.v, m.f, m.fext, m.mass, m.node_bc, m.bcs, prm,
+                                       prm.t + 0.5 * prm.dt};
+  NodeSums out;
+  const bool reduce = Sample || Damp || m.bcs.extent(0) > 0;
+  if (reduce) {
+    Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, out);
+  } else {
+    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp>>{fn});
+  }
   return out;
 }
 

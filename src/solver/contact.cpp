@@ -545,7 +545,14 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
   }
   if (need_build_) build(m);
   if (nfree_ > 0) element_planes<D>(m.x, surf_, ne_);
-  const ContactSums r = contact_forces<D>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_);
+  // Frictionless contact skips the shear springs. On the first step without friction after steps
+  // with it, the full kernel runs once more: it sets every stored shear force to zero (and counts
+  // the spring energy of contacts that end), so that the skipped kernel's zero history is exact.
+  const bool fric = law.mu != 0.0 || law.coh != 0.0;
+  const bool full = !skip_frictionless || fric || friction_before_;
+  friction_before_ = fric || !skip_frictionless;
+  const ContactSums r = full ? contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_)
+                             : contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_);
   dissipated_ += r.dissipated;
   active_ = static_cast<int>(r.active);
   // Verlet test for the next step: the lists stay valid while no surface node has moved more than

@@ -52,6 +52,9 @@ class ContactSystem {
   double dissipated() const { return dissipated_; }
 
   ContactLaw law{};      // penalty, friction, tolerances (public: tests change friction)
+  // Frictionless contact (law.mu = 0, law.coh = 0) computes and stores no shear springs (same
+  // results; off only for the tests and benchmarks that show it).
+  bool skip_frictionless = true;
   double skin = 0;       // Verlet skin (m)
   double radius = 0;     // search distance = law.dpen + skin
 
@@ -96,6 +99,7 @@ class ContactSystem {
   PairScratch<D> scratch_;
   Kokkos::View<double* [D]> xb_;           // positions at the last build
   bool may_meet_ = false, need_build_ = true;
+  bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int active_ = 0;

@@ -434,9 +434,7 @@ void Simulation<D>::step(bool sample) {
     }
     e.contact_elastic = platen_energy<D>(m, t) + (contact_ ? contact_->elastic_energy() : 0.0);
   }
-  prm_.t = t;
-  prm_.dt = dt;
-  const NodeSums w = sample ? update_nodes<D, true>(m, prm_) : update_nodes<D, false>(m, prm_);
+  const NodeSums w = update_nodes_now(sample);
   if (sample) {
     // Works done by time t: everything before this step plus half of this step's increment
     // (the increments are centred on x(n)).
@@ -468,6 +466,15 @@ void Simulation<D>::step(bool sample) {
   work_bc_ += w.v[1];
   t += dt;
   ++step_count;
+}
+
+template <int D>
+NodeSums Simulation<D>::update_nodes_now(bool sample) {
+  prm_.t = t;
+  prm_.dt = dt;
+  const bool damp = !skips.damping || prm_.alpha != 0.0 || prm_.cmass != 0.0;
+  if (sample) return damp ? update_nodes<D, true, true>(m, prm_) : update_nodes<D, true, false>(m, prm_);
+  return damp ? update_nodes<D, false, true>(m, prm_) : update_nodes<D, false, false>(m, prm_);
 }
 
 template <int D>

@@ -54,6 +54,15 @@ class Simulation {
   // One explicit step. With sample = true the energies at the step's start time are computed
   // (full reductions: do it on output and check steps only) and kept for energies().
   void step(bool sample = false);
+  // The node update of step(): advances x and v from the forces in m.f and zeroes m.f (public for
+  // the benchmarks; step() calls it).
+  NodeSums update_nodes_now(bool sample);
+  // Work skipped because the scene does not need it (the results are the same either way; the
+  // switches exist for the tests and benchmarks that show it): no damping force or damping work
+  // while both damping coefficients are zero.
+  struct Skips {
+    bool damping = true;
+  } skips;
   // Energies at the last sampled step (the first step is always sampled).
   const Energies& energies() const { return energies_; }
   // Takes the state at the next step as the energy reference (after changing x or v by hand).
