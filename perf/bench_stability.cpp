@@ -9,6 +9,7 @@
 //                                    momentum, shape
 //   bench_stability impact SPEED     block hitting a rigid wall at SPEED m/s, interfaces breaking:
 //                                    energy balance, bounds, at several safety factors
+#include <Eigen/Dense>
 #include <Kokkos_Core.hpp>
 
 #include <chrono>

@@ -225,7 +225,6 @@ TEST(Stability, SpinningFreeBodyKeepsEnergyAndShape) {
     return std::atan2(x(b, 1) - x(a, 1), x(b, 0) - x(a, 0));
   };
   prev = corner_angle();
-  const double start = prev;
   for (long s = 1; s <= steps; ++s) {
     const bool sample = s % 50 == 0;
     sim.step(sample);
@@ -240,7 +239,6 @@ TEST(Stability, SpinningFreeBodyKeepsEnergyAndShape) {
     }
   }
   angle += std::remainder(corner_angle() - prev, 2 * M_PI);
-  (void)start;
   const double Lz = fdem_test::angular_momentum(sim)[2];
   // shape: every pair of nodes of the deformed body against the reference, after the rotation
   Kokkos::deep_copy(x, sim.m.x);
