@@ -506,9 +506,80 @@ void Simulation<D>::check_finite() {
   }
 }
 
+// Signed measure (2D: twice the area, 3D: six times the volume) of the simplex with edge vectors a.
+template <int D>
+KOKKOS_INLINE_FUNCTION double simplex_orientation(const double (&a)[D][D]) {
+  if constexpr (D == 2) {
+    return a[0][0] * a[1][1] - a[0][1] * a[1][0];
+  } else {
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+  }
+}
+
+template <int D>
+long Simulation<D>::check_inverted(std::string* where) {
+  auto x = m.x;
+  auto X = m.X;
+  auto elem = m.elem;
+  const int ne = m.ne;
+  auto inverted = KOKKOS_LAMBDA(const int e) {
+    double a[D][D], b[D][D];
+    for (int q = 0; q < D; ++q)
+      for (int k = 0; k < D; ++k) {
+        a[q][k] = x(elem(e, q + 1), k) - x(elem(e, 0), k);
+        b[q][k] = X(elem(e, q + 1), k) - X(elem(e, 0), k);
+      }
+    return !(simplex_orientation<D>(a) * simplex_orientation<D>(b) > 0.0);
+  };
+  int count = 0, first = ne;
+  Kokkos::parallel_reduce(
+      "fdem::check_inverted", Kokkos::RangePolicy<ExecSpace>(0, ne),
+      KOKKOS_LAMBDA(const int e, int& n) { n += inverted(e) ? 1 : 0; }, count);
+  if (count > 0)
+    Kokkos::parallel_reduce(
+        "fdem::check_inverted_first", Kokkos::RangePolicy<ExecSpace>(0, ne),
+        KOKKOS_LAMBDA(const int e, int& f) {
+          if (inverted(e) && e < f) f = e;
+        },
+        Kokkos::Min<int>(first));
+  if (count > 0 && where) {
+    auto X_h = Kokkos::create_mirror_view(m.X);
+    auto x_h = Kokkos::create_mirror_view(m.x);
+    auto el_h = Kokkos::create_mirror_view(m.elem);
+    Kokkos::deep_copy(X_h, m.X);
+    Kokkos::deep_copy(x_h, m.x);
+    Kokkos::deep_copy(el_h, m.elem);
+    double c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
+    for (int a = 0; a <= D; ++a)
+      for (int k = 0; k < D; ++k) {
+        c0[k] += X_h(el_h(first, a), k) / (D + 1);
+        c1[k] += x_h(el_h(first, a), k) / (D + 1);
+      }
+    std::ostringstream os;
+    os << count << " element(s) turned inside out at step " << step_count << ", time " << t
+       << " s; the first, element " << first << ", has its centroid at (";
+    for (int k = 0; k < D; ++k) os << (k ? ", " : "") << c1[k];
+    os << ") (reference (";
+    for (int k = 0; k < D; ++k) os << (k ? ", " : "") << c0[k];
+    os << "))";
+    *where = os.str();
+  }
+  return count;
+}
+
 template <int D>
 void Simulation<D>::check_stability() {
   check_finite();
+  if (!warned_inverted_) {  // reported once per run (St Venant-Kirchhoff elements can be crushed
+                            // inside out by violent compression; the run goes on)
+    std::string where;
+    if (check_inverted(&where) > 0) {
+      std::fprintf(stderr, "fdem: warning: %s. An inverted element usually means a load or an impact too "
+                   "violent for the mesh, or an unstable step.\n", where.c_str());
+      warned_inverted_ = true;
+    }
+  }
   const Energies& e = energies_;
   if (!std::isfinite(e.kinetic) || !std::isfinite(e.strain)) {
     std::ostringstream os;

@@ -69,6 +69,9 @@ class Simulation {
   void reset_energy_reference() { have_reference_ = false; }
   // Throws NumericalError naming the step, time and the first node whose state is not finite.
   void check_finite();
+  // Number of elements whose orientation has flipped (turned inside out); with `where`, a message
+  // naming the first of them and its position. check_stability warns once per run.
+  long check_inverted(std::string* where = nullptr);
   // check_finite, then the energy balance: energy appearing from nowhere (more than half the
   // energy scale) means the integration is unstable. Throws NumericalError with step, time and dt.
   void check_stability();
@@ -115,6 +118,7 @@ class Simulation {
   ForceScatter<D> scatter_;
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   std::unique_ptr<ContactSystem<D>> contact_;
+  bool warned_inverted_ = false;
   NodeUpdateParams prm_{};
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
