@@ -26,28 +26,6 @@ namespace {
 using namespace fdem;
 using Clock = std::chrono::steady_clock;
 
-HostMesh merge(const HostMesh& a, const HostMesh& b) {
-  HostMesh m = a;
-  const int na = a.num_nodes(), ea = a.num_elems();
-  m.node_sets.clear();
-  for (const auto& [name, nodes] : a.node_sets) m.node_sets[a.region_names[0] + "." + name] = nodes;
-  m.X.insert(m.X.end(), b.X.begin(), b.X.end());
-  for (int n : b.elems) m.elems.push_back(n + na);
-  const int ra = static_cast<int>(a.region_names.size());
-  for (int r : b.elem_region) m.elem_region.push_back(r + ra);
-  m.region_names.insert(m.region_names.end(), b.region_names.begin(), b.region_names.end());
-  for (const auto& [name, nodes] : b.node_sets) {
-    std::vector<int> s;
-    for (int n : nodes) s.push_back(n + na);
-    m.node_sets[b.region_names[0] + "." + name] = s;
-  }
-  for (int n : b.ifaces) m.ifaces.push_back(n + na);
-  for (int e : b.iface_elems) m.iface_elems.push_back(e + ea);
-  for (int i = 0; i < b.num_nodes(); ++i)
-    m.node_origin.push_back((static_cast<int>(b.node_origin.size()) > i ? b.node_origin[i] : i) + na);
-  return m;
-}
-
 Case make_case(int dim, double h, int contact) {
   Case c;
   c.file = "bench";
@@ -93,7 +71,7 @@ HostMesh scene(int cells) {
                          cells + cells / 2, 1, "floor");
   }
   insert_interfaces(block, {true});
-  HostMesh m = merge(floor, block);
+  HostMesh m = merge_meshes(floor, block, floor.region_names[0], block.region_names[0]);
   return m;
 }
 

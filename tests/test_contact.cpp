@@ -25,34 +25,6 @@ const double kPi = std::acos(-1.0);
 
 // ---- helpers ----
 
-// b appended to a: node ids, elements, regions, interfaces shifted; node sets of b prefixed.
-HostMesh merge(const HostMesh& a, const HostMesh& b, const std::string& prefix_a,
-               const std::string& prefix_b) {
-  HostMesh m = a;
-  const int na = a.num_nodes(), ea = a.num_elems();
-  m.node_sets.clear();
-  for (const auto& [name, nodes] : a.node_sets) m.node_sets[prefix_a + "." + name] = nodes;
-  m.X.insert(m.X.end(), b.X.begin(), b.X.end());
-  for (int n : b.elems) m.elems.push_back(n + na);
-  const int ra = static_cast<int>(a.region_names.size());
-  for (int r : b.elem_region) m.elem_region.push_back(r + ra);
-  m.region_names.insert(m.region_names.end(), b.region_names.begin(), b.region_names.end());
-  for (const auto& [name, nodes] : b.node_sets) {
-    std::vector<int> s;
-    for (int n : nodes) s.push_back(n + na);
-    m.node_sets[prefix_b + "." + name] = s;
-  }
-  for (int n : b.ifaces) m.ifaces.push_back(n + na);
-  for (int e : b.iface_elems) m.iface_elems.push_back(e + ea);
-  if (m.node_origin.size() != static_cast<size_t>(na)) {
-    m.node_origin.resize(na);
-    for (int i = 0; i < na; ++i) m.node_origin[i] = i;
-  }
-  for (int i = 0; i < b.num_nodes(); ++i)
-    m.node_origin.push_back((static_cast<int>(b.node_origin.size()) > i ? b.node_origin[i] : i) + na);
-  return m;
-}
-
 // Nodes of the elements of one region.
 std::vector<int> region_nodes(const HostMesh& m, const std::string& region) {
   const int r = m.region_index(region);
@@ -166,7 +138,7 @@ TEST(ContactCase, EnabledRule) {
   auto c = fdem_test::basic_case(2);
   HostMesh one = generate_crossed_rectangle(0, 0, 1, 1, 2, 2, "body");
   EXPECT_FALSE(contact_wanted(c, one));  // one intact body, no interfaces
-  HostMesh two = merge(one, generate_crossed_rectangle(2, 0, 1, 1, 2, 2, "b"), "a", "b");
+  HostMesh two = merge_meshes(one, generate_crossed_rectangle(2, 0, 1, 1, 2, 2, "b"), "a", "b");
   EXPECT_TRUE(contact_wanted(c, two));
   HostMesh cracked = one;
   insert_interfaces(cracked, {true});
@@ -494,7 +466,7 @@ SlopeResult slope_run(double theta_deg, double mu, double t_run) {
   const double g = 9.81, th = theta_deg * kPi / 180;
   HostMesh plane = generate_crossed_rectangle(0, -0.005, 0.06, 0.005, 24, 2, "plane");
   HostMesh block = generate_crossed_rectangle(0.005, 0.0, 0.01, 0.01, 2, 2, "block");
-  HostMesh mesh = merge(plane, block, "plane", "block");
+  HostMesh mesh = merge_meshes(plane, block, "plane", "block");
   auto c = fdem_test::basic_case(2, 1e8, 0.25, 2500);
   c.region_material = {{"plane", 0}, {"block", 0}};
   VelocityBC fix;
@@ -566,7 +538,7 @@ TEST(ContactInclinedPlane, BlockSlidesAboveTheFrictionAngleWithCoulombAccelerati
 // step; energy (kinetic + strain + contact) within 1 % through the impact; the blocks separate.
 template <int D>
 void head_on(const HostMesh& a, const HostMesh& b, double va, double vb) {
-  HostMesh mesh = merge(a, b, "a", "b");
+  HostMesh mesh = merge_meshes(a, b, "a", "b");
   auto c = fdem_test::basic_case(D, 1e7, 0.25, 1000);
   c.region_material = {{"a", 0}, {"b", 0}};
   c.initial_velocities = {InitialVelocity{"a", {va, 0, 0}}, InitialVelocity{"b", {vb, 0, 0}}};
@@ -634,7 +606,7 @@ TEST(ContactSphere, BouncesOffAWallAfterTheHertzContactTime) {
   const double R = 0.05, h = R / 6, E = 1e7, nu = 0.25, rho = 1000, V = 2.0, gap = 2e-4;
   HostMesh ball = generate_sphere({0, 0, R + gap}, R, h, "ball");
   HostMesh wall = generate_box({-0.03, -0.03, -0.02}, {0.06, 0.06, 0.02}, 3, 3, 1, "wall");
-  HostMesh mesh = merge(wall, ball, "wall", "ball");
+  HostMesh mesh = merge_meshes(wall, ball, "wall", "ball");
   auto c = fdem_test::basic_case(3, E, nu, rho);
   c.materials.push_back(BulkMaterial{"steel", 100 * rho, 100 * E, nu});
   c.region_material = {{"ball", 0}, {"wall", 1}};
@@ -752,7 +724,7 @@ double max_penetration(const Simulation<D>& sim, const HostMesh& mesh, const std
 template <int D>
 void heap_test(HostMesh block, HostMesh floor, double hsize, double t_end, double damping) {
   insert_interfaces(block, {true});
-  HostMesh mesh = merge(floor, block, "floor", "block");
+  HostMesh mesh = merge_meshes(floor, block, "floor", "block");
   auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
   c.region_material = {{"floor", 0}, {"block", 0}};
   // interface (and so contact) stiffness 2 E / h: stiff enough (the weight sinks the pieces

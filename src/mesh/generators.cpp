@@ -158,4 +158,32 @@ HostMesh generate_box(const std::array<double, 3>& origin, const std::array<doub
   return m;
 }
 
+
+HostMesh merge_meshes(const HostMesh& a, const HostMesh& b, const std::string& prefix_a,
+               const std::string& prefix_b) {
+  HostMesh m = a;
+  const int na = a.num_nodes(), ea = a.num_elems();
+  m.node_sets.clear();
+  for (const auto& [name, nodes] : a.node_sets) m.node_sets[prefix_a + "." + name] = nodes;
+  m.X.insert(m.X.end(), b.X.begin(), b.X.end());
+  for (int n : b.elems) m.elems.push_back(n + na);
+  const int ra = static_cast<int>(a.region_names.size());
+  for (int r : b.elem_region) m.elem_region.push_back(r + ra);
+  m.region_names.insert(m.region_names.end(), b.region_names.begin(), b.region_names.end());
+  for (const auto& [name, nodes] : b.node_sets) {
+    std::vector<int> s;
+    for (int n : nodes) s.push_back(n + na);
+    m.node_sets[prefix_b + "." + name] = s;
+  }
+  for (int n : b.ifaces) m.ifaces.push_back(n + na);
+  for (int e : b.iface_elems) m.iface_elems.push_back(e + ea);
+  if (m.node_origin.size() != static_cast<size_t>(na)) {
+    m.node_origin.resize(na);
+    for (int i = 0; i < na; ++i) m.node_origin[i] = i;
+  }
+  for (int i = 0; i < b.num_nodes(); ++i)
+    m.node_origin.push_back((static_cast<int>(b.node_origin.size()) > i ? b.node_origin[i] : i) + na);
+  return m;
+}
+
 }  // namespace fdem
