@@ -563,6 +563,9 @@ class Report:
         self.w()
         self.w("Single benchmarks: `build/openmp/perf/bench_step --help`, `bench_wave`, `bench_contact`, "
                "`perf/sweep_brazil.py --help` (perf/README.md).")
+        self.w()
+        self.w("Runs measured by hand, not repeated by `perf/run_all` (the 1.36-million-tetrahedron impact, "
+               "the fragment analysis): [large-runs.md](large-runs.md).")
         os.makedirs(os.path.dirname(os.path.abspath(self.doc)), exist_ok=True)
         with open(self.doc, "w") as f:
             f.write("\n".join(self.lines) + "\n")
