@@ -616,9 +616,10 @@ json run_skips(double target, const Options& o) {
     Simulation<D>* a = s3[0];
     Simulation<D>* b = s3[1];
     Simulation<D>* c = s3[2];
-    vs.push_back({"friction", "fragments, friction 0", "skip", [a]() { a->step(false); }, a->dt});
-    vs.push_back({"friction", "fragments, friction 0, skip off", "no skip (forced)", [b]() { b->step(false); }, b->dt});
-    vs.push_back({"friction", "fragments, friction 0.5", "not applicable", [c]() { c->step(false); }, c->dt});
+    // Only the contact update is timed here, on the fixed shaken state: stepping the undamped,
+    // fully fragmented block thousands of times (min-time x reps) let it blow up (the corner
+    // contacts of issue 4), after which the grid held every node in a few cells and one build
+    // took minutes and 15 GB.
     vs.push_back({"friction", "contact update, friction 0", "skip", [a]() { a->contact()->update(a->m, a->dt); }, a->dt});
     vs.push_back({"friction", "contact update, friction 0, skip off", "no skip (forced)",
                   [b]() { b->contact()->update(b->m, b->dt); }, b->dt});
