@@ -298,6 +298,56 @@ class Report:
         self.w()
         self.w(table(["mesh", "elements", "B/element-step", "GB/s", "of triad", "check"], rows))
         self.w()
+        self.bandwidth_why()
+
+    def bandwidth_why(self):
+        """Where the bandwidth check fails: which part of the step takes the time, how much of that
+        time its compulsory traffic would need at the triad bandwidth, and so what limits it."""
+        s = self.step
+        lines = []
+        for dim in sorted({r["dim"] for r in s["runs"]}):
+            r = [x for x in s["runs"] if x["dim"] == dim][-1]
+            k = {x["name"]: x for x in r["kernels"]}
+            st = k["step"]
+            if st["fraction_of_triad"] >= BANDWIDTH_TARGET:
+                continue
+            fc = k.get("forces_compute")
+            # the step's time at which its bytes would reach the target fraction of the triad
+            need = st["ns_median"] * st["fraction_of_triad"] / BANDWIDTH_TARGET
+            msg = (f"- {dim}D, {fmt(r['elements'])} elements: the step would reach {100 * BANDWIDTH_TARGET:.0f} % of "
+                   f"the triad at {need / r['elements']:.1f} ns per element-step instead of "
+                   f"{st['ns_per_element_step']:.1f} ({st['ns_per_element_step'] * r['elements'] / need:.2f} x faster).")
+            parts = [(k[n]["ns_median"] / st["ns_median"], n, k[n]) for n in
+                     ("forces_compute", "scatter_reset", "scatter_contribute", "nodes", "contact") if n in k]
+            parts.sort(key=lambda p: p[0], reverse=True)
+            if parts:
+                share, n, x = parts[0]
+                f = x["fraction_of_triad"]
+                what = {
+                    "forces_compute": f"per element the strain and stress of a linear "
+                                      f"{'triangle' if dim == 2 else 'tetrahedron'}, per interface {dim} integration "
+                                      f"points of the Mohr-Coulomb / Benzeggagh-Kenane damage law with the "
+                                      f"exact-gradient rotation terms (square roots, divisions, branches), and the "
+                                      f"gathers of scattered node data",
+                    "scatter_reset": "zeroing the per-thread force copies",
+                    "scatter_contribute": "summing the per-thread force copies",
+                    "nodes": "the central-difference update with damping and boundary conditions",
+                    "contact": "the contact update",
+                }[n]
+                msg += (f" The largest part is `{n}`: {100 * share:.0f} % of the step's time at {100 * f:.0f} % of the "
+                        f"triad, i.e. its compulsory traffic ({x['bytes_per_element']:.0f} B per element) would take "
+                        f"{100 * f:.0f} % of its time at the triad bandwidth; ")
+                if f < 0.5:
+                    msg += f"the other {100 * (1 - f):.0f} % goes to {what}: it is limited by arithmetic and latency, not by memory bandwidth."
+                else:
+                    msg += f"it is close to memory-bound ({what})."
+            lines.append(msg)
+        if lines:
+            self.w("Why the full step falls short of the bandwidth target:")
+            self.w()
+            for m in lines:
+                self.w(m)
+            self.w()
 
     def thread_scaling(self):
         self.w("## 3. Threads")
