@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <random>
 #include <set>
 #include <string>
@@ -799,6 +800,67 @@ TEST(ContactHeap, FullyCrackedBlockSettlesWithoutInterpenetration2D) {
 TEST(ContactHeap, FullyCrackedBlockSettlesWithoutInterpenetration3D) {
   heap_test<3>(generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, 2, 2, 2, "block"),
                generate_box({-0.04, -0.04, -0.01}, {0.12, 0.12, 0.01}, 3, 3, 1, "floor"), 0.02, 1.0, 0.7);
+}
+
+
+// A block cracked into single elements, every node given a random velocity, no damping, no
+// gravity, frictionless: a conservative system, so kinetic + strain + contact energy must stay at
+// the initial kinetic energy while the fragments rattle against each other (many corner contacts:
+// up to 6 copies of a vertex in 2D, about 20 in 3D). FDEM_FRAG_TRACE=1 prints the trace.
+template <int D>
+void rattle_test(HostMesh block, double hsize, double v0, double friction, long steps, double safety) {
+  insert_interfaces(block, {true});
+  auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
+  c.region_material = {{"block", 0}};
+  InterfaceMaterial im = fdem_test::strong_interface(2 * 1e7 / hsize, 0.8 * 1e7 / hsize);
+  c.interface_materials = {im};
+  c.fracture_material = 0;
+  c.contact.friction = friction;
+  c.local_damping = 0.0;
+  c.safety_factor = safety;
+  Simulation<D> sim(c, block);
+  ASSERT_NE(sim.contact(), nullptr);
+  fail_all_interfaces(sim);
+  {
+    auto v = Kokkos::create_mirror_view(sim.m.v);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> u(-v0, v0);
+    for (int i = 0; i < sim.m.nn; ++i)
+      for (int k = 0; k < D; ++k) v(i, k) = u(rng);
+    Kokkos::deep_copy(sim.m.v, v);
+    sim.reset_energy_reference();
+  }
+  sim.step(true);
+  const double e0 = sim.energies().kinetic + sim.energies().strain + sim.energies().contact_elastic;
+  const bool trace = std::getenv("FDEM_FRAG_TRACE") != nullptr;
+  double worst = 0, worst_t = 0;
+  for (long n = 1; n <= steps; ++n) {
+    const bool sample = n % 50 == 0 || n == steps;
+    sim.step(sample);
+    if (!sample) continue;
+    const Energies& e = sim.energies();
+    const double tot = e.kinetic + e.strain + e.contact_elastic;
+    if (std::fabs(tot - e0 + e.friction) > std::fabs(worst)) {
+      worst = tot - e0 + e.friction;
+      worst_t = sim.t;
+    }
+    if (trace)
+      std::printf("step %ld t %.4g kin %.4g strain %.4g contact %.4g friction %.4g total-e0 %.3g active %ld\n", n,
+                  sim.t, e.kinetic / e0, e.strain / e0, e.contact_elastic / e0, e.friction / e0, (tot - e0) / e0,
+                  static_cast<long>(sim.contact()->active_contacts()));
+    if (!(std::fabs(tot) < 100 * e0)) break;  // blown up
+  }
+  std::printf("%dD rattle (friction %g, safety %g): %ld steps, dt %.3g s, worst energy change %.3g of the initial "
+              "energy at t = %.3g s\n", D, friction, safety, steps, sim.dt, worst / e0, worst_t);
+  EXPECT_LT(std::fabs(worst), 0.02 * e0) << "energy of the rattling fragments not conserved";
+}
+
+TEST(ContactRattle, UndampedFragmentsKeepTheirEnergy2D) {
+  rattle_test<2>(generate_crossed_rectangle(0, 0, 0.04, 0.04, 4, 4, "block"), 0.01, 1.0, 0.0, 20000, 0.2);
+}
+
+TEST(ContactRattle, UndampedFragmentsKeepTheirEnergy3D) {
+  rattle_test<3>(generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, 2, 2, 2, "block"), 0.02, 1.0, 0.0, 20000, 0.2);
 }
 
 }  // namespace
