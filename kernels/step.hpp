@@ -287,29 +287,45 @@ void apply_platens(const Model<D>& m, double t, double dt) {
           const PlatenDev& P = ps.p[p];
           double g = 0;
           for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
-          if (g >= 0.0) {
-            for (int k = 0; k < D; ++k) fs(p, b, k) = 0.0;
-            continue;
-          }
-          const double Fn = -P.kn * A * g;
-          // relative tangential displacement increment over the last step
+          // relative displacement increment over the last step
           double du[D], dun = 0;
           for (int k = 0; k < D; ++k) {
             du[k] = (v(i, k) - P.vel[k]) * dt;
             dun += du[k] * P.n[k];
           }
-          double Fs[D], fsn = 0, Fs2 = 0;
+          // Friction is booked as in contact_pair (kernels/contact.hpp): the shear spring's
+          // energy before minus after, plus the work of du against the mean of the old and new
+          // shear forces (zero while sticking, the leap-frog's work while slipping); a contact
+          // that ends releases its spring's energy and the work of its last half step.
+          if (g >= 0.0) {
+            double f2 = 0, w = 0;
+            for (int k = 0; k < D; ++k) {
+              f2 += fs(p, b, k) * fs(p, b, k);
+              w += fs(p, b, k) * du[k];
+              fs(p, b, k) = 0.0;
+            }
+            if (f2 > 0.0) Kokkos::atomic_add(&acc(p, 4), 0.5 * f2 / (P.ks * A) - 0.5 * w);
+            continue;
+          }
+          const double Fn = -P.kn * A * g;
+          double fs0[D], Fs[D], fsn = 0, Fs2 = 0, f2old = 0;
           for (int k = 0; k < D; ++k) fsn += fs(p, b, k) * P.n[k];
           for (int k = 0; k < D; ++k) {
-            Fs[k] = fs(p, b, k) - fsn * P.n[k] - P.ks * A * (du[k] - dun * P.n[k]);
+            fs0[k] = fs(p, b, k) - fsn * P.n[k];
+            f2old += fs0[k] * fs0[k];
+            Fs[k] = fs0[k] - P.ks * A * (du[k] - dun * P.n[k]);
             Fs2 += Fs[k] * Fs[k];
           }
           const double lim = P.mu * Fn + P.coh * A;
           const double Fsm = kmath::sqrt(Fs2);
           if (Fsm > lim) {
             const double r = Fsm > 0 ? lim / Fsm : 0.0;
-            for (int k = 0; k < D; ++k) Fs[k] *= r;
-            Kokkos::atomic_add(&acc(p, 4), lim * (Fsm - lim) / (P.ks * A));
+            double w = 0;
+            for (int k = 0; k < D; ++k) {
+              Fs[k] *= r;
+              w += (fs0[k] + Fs[k]) * du[k];
+            }
+            Kokkos::atomic_add(&acc(p, 4), 0.5 * (f2old - lim * lim) / (P.ks * A) - 0.5 * w);
           }
           double work = 0;
           for (int k = 0; k < D; ++k) {

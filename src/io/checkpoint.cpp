@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kFormat = "fdem checkpoint";
-constexpr int kVersion = 1;
+// 2: contact pairs carry a penetration allowance (contact/pair_g0)
+constexpr int kVersion = 2;
 
 // Owns one HDF5 identifier.
 class Id {

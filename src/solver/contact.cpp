@@ -506,6 +506,7 @@ void ContactSystem<D>::build(const Model<D>& m) {
     next_.face = Kokkos::View<int*>("fdem::contact::pair_face", cap);
     next_.fn = Kokkos::View<double*>("fdem::contact::pair_fn", cap);
     next_.ac = Kokkos::View<double*>("fdem::contact::pair_ac", cap);
+    next_.g0 = Kokkos::View<double*>("fdem::contact::pair_g0", cap);
     next_.fs = Kokkos::View<double* [D]>("fdem::contact::pair_fs", cap);
     next_.capacity = cap;
   }
@@ -513,6 +514,9 @@ void ContactSystem<D>::build(const Model<D>& m) {
     const int cap = next_.capacity;
     scratch_.g = Kokkos::View<double*>("fdem::contact::scratch_g", cap);
     scratch_.phi = Kokkos::View<double*>("fdem::contact::scratch_phi", cap);
+    scratch_.depth = Kokkos::View<double*>("fdem::contact::scratch_depth", cap);
+    scratch_.w = Kokkos::View<double*>("fdem::contact::scratch_w", cap);
+    scratch_.rel = Kokkos::View<double*>("fdem::contact::scratch_rel", cap);
     scratch_.n = Kokkos::View<double* [D]>("fdem::contact::scratch_n", cap);
   }
   candidates_fill<D>(grid_, S, filter_, next_.off, next_.face);
@@ -576,10 +580,11 @@ void ContactSystem<D>::save_state(StateArrays& s) const {
     save_view(s, "contact/pair_face", Kokkos::subview(cur_.face, used));
     save_view(s, "contact/pair_fn", Kokkos::subview(cur_.fn, used));
     save_view(s, "contact/pair_ac", Kokkos::subview(cur_.ac, used));
+    save_view(s, "contact/pair_g0", Kokkos::subview(cur_.g0, used));
     save_view(s, "contact/pair_fs", Kokkos::subview(cur_.fs, used, Kokkos::ALL));
   } else {
     s.i64["contact/pair_face"] = {};
-    for (const char* n : {"contact/pair_fn", "contact/pair_ac", "contact/pair_fs"}) s.f64[n] = {};
+    for (const char* n : {"contact/pair_fn", "contact/pair_ac", "contact/pair_g0", "contact/pair_fs"}) s.f64[n] = {};
   }
   save_view(s, "contact/xb", xb_);
   save_view(s, "contact/node_area", surf_.narea);
@@ -607,6 +612,7 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
   cur_.face = Kokkos::View<int*>("fdem::contact::pair_face", cap);
   cur_.fn = Kokkos::View<double*>("fdem::contact::pair_fn", cap);
   cur_.ac = Kokkos::View<double*>("fdem::contact::pair_ac", cap);
+  cur_.g0 = Kokkos::View<double*>("fdem::contact::pair_g0", cap);
   cur_.fs = Kokkos::View<double* [D]>("fdem::contact::pair_fs", cap);
   cur_.capacity = cap;
   cur_.size = size;
@@ -614,6 +620,7 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
   load_view(s, "contact/pair_face", Kokkos::subview(cur_.face, used));
   load_view(s, "contact/pair_fn", Kokkos::subview(cur_.fn, used));
   load_view(s, "contact/pair_ac", Kokkos::subview(cur_.ac, used));
+  load_view(s, "contact/pair_g0", Kokkos::subview(cur_.g0, used));
   load_view(s, "contact/pair_fs", Kokkos::subview(cur_.fs, used, Kokkos::ALL));
   {  // the list must be one the search could have built: offsets rising to size, faces in range
     auto off = Kokkos::create_mirror_view(cur_.off);
@@ -627,6 +634,9 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
   }
   scratch_.g = Kokkos::View<double*>("fdem::contact::scratch_g", cap);
   scratch_.phi = Kokkos::View<double*>("fdem::contact::scratch_phi", cap);
+  scratch_.depth = Kokkos::View<double*>("fdem::contact::scratch_depth", cap);
+  scratch_.w = Kokkos::View<double*>("fdem::contact::scratch_w", cap);
+  scratch_.rel = Kokkos::View<double*>("fdem::contact::scratch_rel", cap);
   scratch_.n = Kokkos::View<double* [D]>("fdem::contact::scratch_n", cap);
   load_view(s, "contact/xb", xb_);
   load_view(s, "contact/node_area", surf_.narea);
