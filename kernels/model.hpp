@@ -67,11 +67,15 @@ struct Model {
   bool contact_handover = false;
   double handover_slip = 0;  // see interface_parted (kernels/step.hpp)
 
-  // outer boundary: nodes that can touch platens, with their contact (tributary) areas
+  // Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
+  // surface node, including the faces of cracks handed over to contact during the run (the
+  // contact system's surface nodes, see Simulation::sync_platen_nodes). Their tributary areas
+  // (barea) and the platens' shear springs (platen_fs) are indexed by node id.
   Kokkos::View<int*> bnode;
-  Kokkos::View<double*> barea;
+  Kokkos::View<double*> barea;                  // nn
   PlatenSet platens;
-  Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, boundary node)
+  Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, node)
+  Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, node)
   Kokkos::View<double* [kPlatenAcc]> platen_acc;
 };
 

@@ -279,10 +279,11 @@ void apply_platens(const Model<D>& m, double t, double dt) {
   auto bnode = m.bnode;
   auto barea = m.barea;
   auto fs = m.platen_fs;
+  auto g0 = m.platen_g0;
   Kokkos::parallel_for(
       "fdem::platens", Kokkos::RangePolicy<ExecSpace>(0, m.nb), KOKKOS_LAMBDA(const int b) {
         const int i = bnode(b);
-        const double A = barea(b);
+        const double A = barea(i);
         for (int p = 0; p < ps.count; ++p) {
           const PlatenDev& P = ps.p[p];
           double g = 0;
@@ -297,21 +298,25 @@ void apply_platens(const Model<D>& m, double t, double dt) {
           // energy before minus after, plus the work of du against the mean of the old and new
           // shear forces (zero while sticking, the leap-frog's work while slipping); a contact
           // that ends releases its spring's energy and the work of its last half step.
+          // gap from the allowance g0 (<= 0, Simulation::sync_platen_nodes), which follows the
+          // node out while it is shallower
+          if (g >= g0(p, i)) g0(p, i) = g < 0.0 ? g : 0.0;
+          g -= g0(p, i);
           if (g >= 0.0) {
             double f2 = 0, w = 0;
             for (int k = 0; k < D; ++k) {
-              f2 += fs(p, b, k) * fs(p, b, k);
-              w += fs(p, b, k) * du[k];
-              fs(p, b, k) = 0.0;
+              f2 += fs(p, i, k) * fs(p, i, k);
+              w += fs(p, i, k) * du[k];
+              fs(p, i, k) = 0.0;
             }
             if (f2 > 0.0) Kokkos::atomic_add(&acc(p, 4), 0.5 * f2 / (P.ks * A) - 0.5 * w);
             continue;
           }
           const double Fn = -P.kn * A * g;
           double fs0[D], Fs[D], fsn = 0, Fs2 = 0, f2old = 0;
-          for (int k = 0; k < D; ++k) fsn += fs(p, b, k) * P.n[k];
+          for (int k = 0; k < D; ++k) fsn += fs(p, i, k) * P.n[k];
           for (int k = 0; k < D; ++k) {
-            fs0[k] = fs(p, b, k) - fsn * P.n[k];
+            fs0[k] = fs(p, i, k) - fsn * P.n[k];
             f2old += fs0[k] * fs0[k];
             Fs[k] = fs0[k] - P.ks * A * (du[k] - dun * P.n[k]);
             Fs2 += Fs[k] * Fs[k];
@@ -330,7 +335,7 @@ void apply_platens(const Model<D>& m, double t, double dt) {
           double work = 0;
           for (int k = 0; k < D; ++k) {
             const double Fk = Fn * P.n[k] + Fs[k];
-            fs(p, b, k) = Fs[k];
+            fs(p, i, k) = Fs[k];
             f(i, k) += Fk;
             Kokkos::atomic_add(&acc(p, k), Fk);
             work += Fk * P.vel[k] * dt;
@@ -516,19 +521,21 @@ double platen_energy(const Model<D>& m, double t) {
   auto bnode = m.bnode;
   auto barea = m.barea;
   auto fs = m.platen_fs;
+  auto g0 = m.platen_g0;
   double e = 0;
   Kokkos::parallel_reduce(
       "fdem::platen_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nb),
       KOKKOS_LAMBDA(const int b, double& s) {
         const int i = bnode(b);
-        const double A = barea(b);
+        const double A = barea(i);
         for (int p = 0; p < ps.count; ++p) {
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
             g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
-            f2 += fs(p, b, k) * fs(p, b, k);
+            f2 += fs(p, i, k) * fs(p, i, k);
           }
+          g -= g0(p, i);
           if (g < 0) s += 0.5 * P.kn * A * g * g + 0.5 * f2 / (P.ks * A);
         }
       },

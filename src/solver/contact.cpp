@@ -227,6 +227,7 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
     for (int f = 0; f < nf_; ++f)
       for (int a = 0; a < D; ++a) nface[cur[fnode[static_cast<size_t>(f) * D + a]]++] = f;
   }
+  potential_area_ = area;
   stable_ = std::numeric_limits<double>::infinity();
   const double kmax = std::max(law.kn, law.ks);
   for (int i = 0; i < nn_; ++i)
@@ -439,6 +440,7 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
       ns);
   ns_ = ns;
   need_build_ = true;
+  ++surface_version_;
 }
 
 template <int D>

@@ -65,6 +65,11 @@ class ContactSystem {
   int candidates() const { return cur_.size; }
   int active_contacts() const { return active_; }
   long builds() const { return builds_; }
+  // Changes whenever the surfaces change (active faces, surface nodes, contact areas).
+  long surface_version() const { return surface_version_; }
+  // Each node's largest possible contact area for rigid platens (its share of every face it can
+  // ever be part of: outer boundary and both faces of interfaces; host).
+  const std::vector<double>& potential_area() const { return potential_area_; }
   long handed_over() const { return handed_; }
   int bodies() const { return bodies_; }
 
@@ -103,7 +108,8 @@ class ContactSystem {
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int active_ = 0;
-  long builds_ = 0, handed_ = 0;
+  long builds_ = 0, handed_ = 0, surface_version_ = 0;
+  std::vector<double> potential_area_;
   double dissipated_ = 0;
 };
 

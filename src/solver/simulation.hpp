@@ -90,6 +90,10 @@ class Simulation {
 
   // Contact between bodies and fragments (null when the case has it off; see solver/contact.hpp).
   ContactSystem<D>* contact() { return contact_.get(); }
+  // With contact: the platens act on the contact system's surface nodes with their areas
+  // (called when the surfaces change; public only because CUDA lambdas may not sit in private
+  // member functions).
+  void sync_platen_nodes();
   // Changes the damping from the next step on (e.g. settle quasi-statically, then run dynamically).
   void set_damping(double local, double mass_proportional) {
     prm_.alpha = local;
@@ -118,6 +122,7 @@ class Simulation {
   ForceScatter<D> scatter_;
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   std::unique_ptr<ContactSystem<D>> contact_;
+  long platen_surface_version_ = -1;  // contact surfaces the platen node list was taken from
   bool warned_inverted_ = false;
   NodeUpdateParams prm_{};
   double gravity_[3] = {0, 0, 0};
