@@ -332,9 +332,13 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   m.contact_handover = true;
   m.handover_slip = law.dpen;
   m.icontact_pending = Kokkos::View<int>("fdem::icontact_pending");
-  // On host backends the handover flag is read every step (free); on GPUs every 10 steps (a
-  // failed interface keeps its compression penalty until then).
-  check_every_ = Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? 1 : 10;
+  // Failed, parted interfaces are handed over every 25 steps (a failed interface keeps its
+  // compression penalty until then): each handover refreshes the surfaces and rebuilds the
+  // candidate lists, which in the 3D impact at 20 m/s (h = 8 mm) happened 356 times in 4625 steps
+  // when checked every step, a quarter of the run time (78 builds and 35 % less time at 50 steps;
+  // fragments, energy balance and handed-over count alike). On GPUs the check also costs a copy
+  // of the pending flag to the host.
+  check_every_ = 25;
   refresh_surfaces(m);
 }
 

@@ -116,6 +116,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
                        const RunOptions& opt, const RunIdentity& id, const StateArrays* restart) {
   const auto wall0 = Clock::now();
   Simulation<D> sim(c, mesh);
+  const int boundary_nodes = sim.m.nb;  // before contact adds crack faces to the platens' nodes
   if (restart) sim.load_state(*restart);
   const int np = sim.m.platens.count;
   const char* axes[3] = {"x", "y", "z"};
@@ -411,7 +412,7 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   summary["case"] = c.name;
   summary["dimension"] = D;
   summary["counts"] = mesh_report(mesh);
-  summary["counts"]["boundary_nodes"] = sim.m.nb;
+  summary["counts"]["boundary_nodes"] = boundary_nodes;
   summary["time_step"] = stable_report(sim);
   summary["steps"] = sim.step_count;
   summary["end_time_s"] = sim.t;
@@ -432,6 +433,14 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
   summary["interfaces_damaged"] = last.damaged;
   summary["interfaces_failed"] = last.failed;
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
+  if (ContactSystem<D>* ct = sim.contact()) {
+    summary["contact"] = {{"interfaces_handed_over", ct->handed_over()},
+                          {"surface_nodes", ct->surface_nodes()},
+                          {"candidate_pairs", ct->candidates()},
+                          {"active_contacts", ct->active_contacts()},
+                          {"grid_builds", ct->builds()},
+                          {"stable_step_s", ct->stable_step()}};
+  }
   if (frag) {
     const FragmentStats& fs = fragments_now();
     std::vector<double> masses = frag->masses();
