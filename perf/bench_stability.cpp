@@ -9,6 +9,9 @@
 //                                    momentum, shape
 //   bench_stability impact SPEED     block hitting a rigid wall at SPEED m/s, interfaces breaking:
 //                                    energy balance, bounds, at several safety factors
+// Eigen runs on the host only here: without EIGEN_NO_CUDA, nvcc (CUDA builds) makes Eigen mark its
+// functions __host__ __device__, which CUDA 13 warns about (#20012-D, #20015-D) in Eigen 3.4.
+#define EIGEN_NO_CUDA
 #include <Eigen/Dense>
 #include <Kokkos_Core.hpp>
 

@@ -213,8 +213,6 @@ class Reader {
     }
   }
 
-  bool has(const json& obj, const char* key) const { return obj.contains(key); }
-
   double number_value(const json& v, const std::string& p, const Range& r) const {
     if (!v.is_number()) fail(p, "expected a number, got " + describe(v));
     double x = v.get<double>();

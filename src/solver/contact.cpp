@@ -66,9 +66,18 @@ struct KeyHash {
   }
 };
 
+// d = 2 or 3 (the dimension). The first d entries are sorted by compare-and-swap: std::sort here
+// made g++ 12, as nvcc's host compiler, report a false -Warray-bounds in its insertion sort.
 std::array<int, 3> sorted_key(const int* nodes, int d) {
   std::array<int, 3> k{nodes[0], nodes[1], d == 3 ? nodes[2] : -1};
-  std::sort(k.begin(), k.begin() + d);
+  auto order = [&k](int a, int b) {
+    if (k[b] < k[a]) std::swap(k[a], k[b]);
+  };
+  order(0, 1);
+  if (d == 3) {
+    order(1, 2);
+    order(0, 1);
+  }
   return k;
 }
 
