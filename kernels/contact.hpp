@@ -89,6 +89,76 @@ KOKKOS_INLINE_FUNCTION double face_project(const double (&xf)[D][D], const doubl
   return g;
 }
 
+// The geometry of a face that face_project needs, computed once per step for every active face
+// (face_geometry) instead of once per candidate pair (a node has tens of candidates in a
+// fragmented 3D mesh): 2D x0, n, t = x1 - x0, 1 / |t|^2; 3D x0, n,
+// e1 = x1 - x0, e2 = x2 - x0, d00, d01, d11 (their dot products) and 1 / (d00 d11 - d01^2).
+template <int D>
+struct FaceGeo {
+  static constexpr int size = D == 2 ? 7 : 16;
+};
+
+template <int D, class G>
+KOKKOS_INLINE_FUNCTION void face_geometry_of(const double (&xf)[D][D], const G& geo, int f) {
+  double n[D];
+  face_normal<D>(xf, n);
+  for (int k = 0; k < D; ++k) {
+    geo(f, k) = xf[0][k];
+    geo(f, D + k) = n[k];
+  }
+  if constexpr (D == 2) {
+    const double tx = xf[1][0] - xf[0][0], ty = xf[1][1] - xf[0][1];
+    const double L2 = tx * tx + ty * ty;
+    geo(f, 4) = tx;
+    geo(f, 5) = ty;
+    geo(f, 6) = L2 > 0 ? 1.0 / L2 : 0.0;
+  } else {
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+      e1[k] = xf[1][k] - xf[0][k];
+      e2[k] = xf[2][k] - xf[0][k];
+      geo(f, 6 + k) = e1[k];
+      geo(f, 9 + k) = e2[k];
+    }
+    const double d00 = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2];
+    const double d01 = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2];
+    const double d11 = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2];
+    const double den = d00 * d11 - d01 * d01;
+    geo(f, 12) = d00;
+    geo(f, 13) = d01;
+    geo(f, 14) = d11;
+    geo(f, 15) = den > 0 ? 1.0 / den : 0.0;
+  }
+}
+
+// face_project from the stored geometry of face f (same arithmetic).
+template <int D, class G>
+KOKKOS_INLINE_FUNCTION double face_project_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
+                                               double (&N)[D]) {
+  double w[D], g = 0;
+  for (int k = 0; k < D; ++k) {
+    n[k] = geo(f, D + k);
+    w[k] = p[k] - geo(f, k);
+    g += w[k] * n[k];
+  }
+  if constexpr (D == 2) {
+    const double xi = (w[0] * geo(f, 4) + w[1] * geo(f, 5)) * geo(f, 6);
+    N[0] = 1.0 - xi;
+    N[1] = xi;
+  } else {
+    double d20 = 0, d21 = 0;
+    for (int k = 0; k < 3; ++k) {
+      d20 += w[k] * geo(f, 6 + k);
+      d21 += w[k] * geo(f, 9 + k);
+    }
+    const double d00 = geo(f, 12), d01 = geo(f, 13), d11 = geo(f, 14), id = geo(f, 15);
+    N[1] = (d11 * d20 - d01 * d21) * id;
+    N[2] = (d00 * d21 - d01 * d20) * id;
+    N[0] = 1.0 - N[1] - N[2];
+  }
+  return g;
+}
+
 // The two faces of one interface: node s is a node of the other face of face f's interface
 // (faces nb + 2q and nb + 2q + 1 belong to interface q = fiface(f); -1: outer boundary).
 template <int D>
@@ -552,7 +622,29 @@ struct ContactSurface {
   Kokkos::View<int*> fiface;
   int nb = 0;
   Kokkos::View<int*> vgrp, clus;
+  // geometry of the active faces at the current positions (face_geometry): row fslot(f) for an
+  // active face f (its place in the list of active faces), FaceGeo<D>::size values each
+  Kokkos::View<int*> fslot;
+  Kokkos::View<double**> fgeo;
 };
+
+// The geometry of every active face at the current positions (see FaceGeo), once per step.
+template <int D>
+void face_geometry(const Kokkos::View<double* [D]>& x, const ContactSurface<D>& surf,
+                   const Kokkos::View<int*>& afaces, int na) {
+  auto xx = x;
+  auto fnode = surf.fnode;
+  auto geo = surf.fgeo;
+  auto af = afaces;
+  Kokkos::parallel_for(
+      "fdem::contact::face_geometry", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
+        const int f = af(i);
+        double xf[D][D];
+        for (int a = 0; a < D; ++a)
+          for (int k = 0; k < D; ++k) xf[a][k] = xx(fnode(f, a), k);
+        face_geometry_of<D>(xf, geo, i);
+      });
+}
 
 // Scratch of the narrow phase, one entry per candidate pair (sized like the pair list).
 template <int D>
@@ -649,18 +741,13 @@ KOKKOS_INLINE_FUNCTION double facing_fade(double facing) {
 }
 
 template <int D>
-KOKKOS_INLINE_FUNCTION double node_facing(const ContactSurface<D>& S, const Kokkos::View<double* [D]>& x,
-                                          int s, const double (&n)[D]) {
+KOKKOS_INLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, const double (&n)[D]) {
   double best = -1.0;
   for (int q = S.nfoff(s); q < S.nfoff(s + 1); ++q) {
     const int f2 = S.nface(q);
     if (!S.factive(f2)) continue;
-    double y[D][D], n2[D];
-    for (int c = 0; c < D; ++c)
-      for (int k = 0; k < D; ++k) y[c][k] = x(S.fnode(f2, c), k);
-    face_normal<D>(y, n2);
     double cw = 0;
-    for (int k = 0; k < D; ++k) cw -= n2[k] * n[k];
+    for (int k = 0; k < D; ++k) cw -= S.fgeo(S.fslot(f2), D + k) * n[k];
     best = cw > best ? cw : best;
   }
   return best;
@@ -755,7 +842,7 @@ struct ContactSums {
 // for the switch from friction to none).
 template <int D, bool Fric = true>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
-                                         const Kokkos::View<double* [D]>& x, const Kokkos::View<double* [D]>& v,
+                                         const Kokkos::View<double* [D]>& v,
                                          const Kokkos::View<double* [D]>& f, const Kokkos::View<double*>& pfn,
                                          const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
                                          const Kokkos::View<double* [D]>& pfs, int j, int s, int fc,
@@ -764,10 +851,8 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
   const bool was = pfn(j) > 0.0;
   double g0 = pg0(j);
   if (!(A > 0.0) && !(was || g0 < 0.0)) return;  // not in contact, nothing to update
-  double xf[D][D], n[D], N[D];
-  for (int a = 0; a < D; ++a)
-    for (int k = 0; k < D; ++k) xf[a][k] = x(S.fnode(fc, a), k);
-  const double g = face_project<D>(xf, xs, n, N);
+  double n[D], N[D];
+  const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
   double Nc[D], nsum = 0;
   for (int q = 0; q < D; ++q) {
     Nc[q] = kclamp(N[q], 0.0, 1.0);
@@ -926,21 +1011,19 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
             for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
             const double lim =
                 mine && !(sdep(j) >= 0.0) ? related_depth<D>(S, pface, sdep, b, e, fc) / kmath::sqrt(Anode) : 0.0;
-            contact_pair<D, Fric>(S, L, x, v, f, pfn, pac, pg0, pfs, j, s, fc, xs, vs, mine ? Anode : 0.0, lim, 0.0,
+            contact_pair<D, Fric>(S, L, v, f, pfn, pac, pg0, pfs, j, s, fc, xs, vs, mine ? Anode : 0.0, lim, 0.0,
                                   dt, sums);
             sphi(j) = -1.0;  // done
             continue;
           }
           ++nface_form;
-          double xf[D][D], n[D], N[D];
-          for (int a = 0; a < D; ++a)
-            for (int k = 0; k < D; ++k) xf[a][k] = x(S.fnode(fc, a), k);
-          const double g = face_project<D>(xf, xs, n, N);
+          double n[D], N[D];
+          const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
           double score = N[0];
           for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
           const bool near = g > -L.dpen && g < L.dpen;
           double phi = near ? contact_fade(score, L.tol) : 0.0;
-          if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, x, s, n));
+          if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
           sg(j) = g;
           sphi(j) = phi;
           for (int k = 0; k < D; ++k) sn(j, k) = n[k];
@@ -981,7 +1064,7 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
           if (w > 0.0 && sdep(j) >= 0.0 && Anode * w > pac(j))
             for (int jj = b; jj < e; ++jj)
               if (jj != j && srel(jj) > 0.0 && same_piece<D>(S, fc, pface(jj))) budget += srel(jj);
-          contact_pair<D, Fric>(S, L, x, v, f, pfn, pac, pg0, pfs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
+          contact_pair<D, Fric>(S, L, v, f, pfn, pac, pg0, pfs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
                                 sums);
         }
       },

@@ -294,6 +294,7 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
       for (int a = 0; a < D; ++a) h(f, a) = fnode[static_cast<size_t>(f) * D + a];
     Kokkos::deep_copy(surf_.fnode, h);
   }
+  surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
   surf_.fshare = Kokkos::View<double*>("fdem::contact::fshare", nf_);
   {
     auto h = mirror(surf_.fshare);
@@ -405,6 +406,14 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
       },
       na);
   na_ = na;
+  if (static_cast<int>(surf_.fgeo.extent(0)) < na_)  // grows with the surfaces (with headroom)
+    surf_.fgeo = Kokkos::View<double**>("fdem::contact::fgeo", std::min(nf_, 3 * na_ / 2 + 64), FaceGeo<D>::size);
+  {
+    auto fslot = surf_.fslot;
+    Kokkos::parallel_for(
+        "fdem::contact::face_slots", Kokkos::RangePolicy<ExecSpace>(0, na_),
+        KOKKOS_LAMBDA(const int i) { fslot(afaces(i)) = i; });
+  }
   auto mark = mark_;
   auto fnode = surf_.fnode;
   Kokkos::deep_copy(mark, 0);
@@ -563,6 +572,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
     return;
   }
   if (need_build_) build(m);
+  face_geometry<D>(m.x, surf_, afaces_, na_);
   if (nfree_ > 0) element_planes<D>(m.x, surf_, ne_);
   // Frictionless contact skips the shear springs. On the first step without friction after steps
   // with it, the full kernel runs once more: it sets every stored shear force to zero (and counts
