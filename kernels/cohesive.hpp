@@ -13,6 +13,10 @@ struct CohesiveParams {
   double tanphi;     // -
   double Gnc, Gsc;   // N/m
   double eta;        // BK exponent
+  // Strength change since the histories were last updated: the strength the histories were
+  // written under divided by the strength now (strength reduction: SRF_old / SRF_new). 1: none.
+  // cohesive_update moves the softening envelope of initiated points with it (below).
+  double rescale = 1.0;
 };
 
 // History of one integration point. dm0 == 0: not initiated yet. After initiation:
@@ -38,6 +42,29 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
                                             CohesivePoint& s, double& tn, double& kss, double& D) {
   const double dnp = dn > 0.0 ? dn : 0.0;
   const double dm = kmath::sqrt(dnp * dnp + ds * ds);
+  if (s.dm0 > 0.0 && p.rescale != 1.0) {
+    // The strength (f_t, c, tan(phi)) has been divided by a factor since the last update
+    // (strength reduction): the envelope of an initiated point follows the strength it has now.
+    // The initiation separation scales with the strength (the criterion is linear in it), the
+    // fracture energy G_c = K dm0 dmf / 2 stays, so dmf scales inversely. The damage rises at the
+    // separation the point has, and the stored energy it releases, psi0 dD with psi0 the
+    // undamaged energy of the present separation (exact: psi0 does not change while only the
+    // strength does), is fracture dissipation. Damage never heals: where the new envelope would
+    // give less damage (past the middle of the softening branch under a reduction, or under a
+    // strength that rises), dmax moves to where the present secant meets the new envelope.
+    const double D0 = cohesive_damage(s);
+    s.dm0 *= p.rescale;
+    s.dmf /= p.rescale;
+    if (s.dmf < s.dm0 * (1.0 + 1e-12)) s.dmf = s.dm0 * (1.0 + 1e-12);
+    const double D1 = cohesive_damage(s);
+    if (D1 > D0) {
+      s.wd += 0.5 * (p.kn * dnp * dnp + p.ks * ds * ds) * (D1 - D0);
+    } else if (D1 < D0) {
+      const double x = D0 >= 1.0 ? s.dmf : s.dmf * s.dm0 / (s.dmf - D0 * (s.dmf - s.dm0));
+      s.dmax = kmax(s.dmax, x);
+      if (D0 >= 1.0) s.dmax = kmax(s.dmax, s.dmf);
+    }
+  }
   if (s.dm0 <= 0.0) {
     // Undamaged: initiation check on the elastic tractions (tensile failure has priority).
     const double tn_e = p.kn * dn;

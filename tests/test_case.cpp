@@ -593,6 +593,30 @@ TEST(CaseOverrides, NestedArrayNumericAndString) {
   EXPECT_EQ(c.resolved["materials"]["concrete"]["E"], 4e10);
 }
 
+// damping.change: the damping from a given time on (slope: settle at 0.7, then let it move), and
+// fracture.strength_reduction: its keys, defaults and ranges.
+TEST(CaseDamping, ChangeAtATimeAndStrengthReduction) {
+  Case c = fdem::parse_case(base_doc(), "test.json", {R"(damping.change={"time": 0.5, "local": 0.05})"});
+  EXPECT_DOUBLE_EQ(c.damping_change_time, 0.5);
+  EXPECT_DOUBLE_EQ(c.damping_change_local, 0.05);
+  EXPECT_DOUBLE_EQ(c.damping_change_mass, 0.0);
+  EXPECT_EQ(c.resolved["damping"]["change"]["mass_proportional"], 0.0);
+  c = fdem::parse_case(base_doc(), "test.json");
+  EXPECT_LT(c.damping_change_time, 0);
+  EXPECT_HAS(error_of(base_doc(), {R"(damping.change={"local": 0.1})"}), "damping.change.time");
+  EXPECT_HAS(error_of(base_doc(), {R"(damping.change={"time": 1, "local": 1.0})"}), "damping.change.local");
+  EXPECT_HAS(error_of(base_doc(), {R"(damping.change={"time": 1, "loc": 0.1})"}), "did you mean 'local'?");
+  c = fdem::parse_case(base_doc(), "test.json",
+                       {R"(fracture.strength_reduction={"initial": 0.5, "start_time": 0.2, "rate": 2})"});
+  EXPECT_DOUBLE_EQ(c.srf_initial, 0.5);
+  EXPECT_DOUBLE_EQ(c.srf_start, 0.2);
+  EXPECT_DOUBLE_EQ(c.srf_rate, 2);
+  EXPECT_HAS(error_of(base_doc(), {R"(fracture.strength_reduction={"initial": 0})"}),
+             "fracture.strength_reduction.initial");
+  EXPECT_HAS(error_of(base_doc(), {R"(fracture.strength_reduction={"rate": -1})"}),
+             "fracture.strength_reduction.rate");
+}
+
 TEST(CaseOverrides, NewKeysAndRemovals) {
   // a new leaf under an existing object
   Case c = fdem::parse_case(base_doc(), "test.json", {"damping.mass_proportional=5", "time.dt=1e-8"});

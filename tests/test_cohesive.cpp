@@ -188,3 +188,142 @@ TEST(Cohesive, InitiationLiesOnTheEnvelopeWhenTheStrengthDrops) {
 }
 
 }  // namespace
+
+namespace {
+
+// Strength reduction of an initiated point (slope stability, CohesiveParams::rescale): the
+// softening envelope follows the present strength, and the energy the point releases when its
+// damage rises at fixed separation is dissipated, so that work = stored + dissipated throughout.
+CohesiveParams reduced(CohesiveParams p0, double srf_old, double srf_new) {
+  CohesiveParams p = p0;
+  p.ft = p0.ft / srf_new;
+  p.c = p0.c / srf_new;
+  p.tanphi = p0.tanphi / srf_new;
+  p.rescale = srf_old / srf_new;
+  return p;
+}
+
+TEST(Cohesive, EnvelopeFollowsTheReducedStrength) {
+  const auto p0 = table1();
+  // mode II, a little past initiation at SRF 1
+  const double s0 = p0.c / p0.ks, sf = 2 * p0.Gsc / p0.c;
+  const double d = s0 + 0.05 * (sf - s0);
+  CohesivePoint h{0, 0, 0, 0};
+  double tn, kss, D;
+  fdem::cohesive_update(p0, 0.0, 0.5 * s0, h, tn, kss, D);
+  fdem::cohesive_update(p0, 0.0, d, h, tn, kss, D);
+  const double D1 = D, ts1 = kss * d;
+  EXPECT_NEAR(ts1, p0.c * (sf - d) / (sf - s0), 1e-9 * p0.c);
+  const double stored1 = fdem::cohesive_stored(p0, 0.0, d, D1), wd1 = h.wd;
+  // SRF 1 -> 2 at the same separation: the point is on the envelope of c / 2 with the same G_sc
+  const auto p2 = reduced(p0, 1.0, 2.0);
+  fdem::cohesive_update(p2, 0.0, d, h, tn, kss, D);
+  const double s2 = 0.5 * s0, sf2 = 2 * sf;
+  EXPECT_NEAR(h.dm0, s2, 1e-12 * s0);
+  EXPECT_NEAR(h.dmf, sf2, 1e-12 * sf);
+  EXPECT_NEAR(kss * d, 0.5 * p0.c * (sf2 - d) / (sf2 - s2), 1e-9 * p0.c);
+  EXPECT_GT(D, D1);
+  // nothing was done on the point: the stored energy it lost is dissipated
+  EXPECT_NEAR(fdem::cohesive_stored(p2, 0.0, d, D) + h.wd, stored1 + wd1, 1e-9 * (stored1 + wd1));
+  // a second update at the same strength changes nothing
+  const CohesivePoint before = h;
+  auto p2b = p2;
+  p2b.rescale = 1.0;
+  fdem::cohesive_update(p2b, 0.0, d, h, tn, kss, D);
+  EXPECT_EQ(h.dmax, before.dmax);
+  EXPECT_EQ(h.wd, before.wd);
+}
+
+// Loading to failure while the strength falls step by step (mixed mode, 45 degrees, SRF 1 ->
+// 2.5 along the path): the point stays on the envelope of the present strength, the work
+// integrated from the tractions equals stored + dissipated energy throughout, and at failure all
+// of it is dissipated. That is more than the G_c of the mode mix (the envelope of the final
+// strength): earlier the point followed higher envelopes; the reduction divides the strengths,
+// not G_c (the area under every envelope is G_c).
+TEST(Cohesive, StrengthFallingDuringSofteningDissipatesTheWorkDone) {
+  const auto p0 = table1();
+  const double a = 45 * M_PI / 180, cn = std::cos(a), cs = std::sin(a);
+  const double K = p0.kn * cn * cn + p0.ks * cs * cs;
+  const double GS = p0.ks * cs * cs, GT = p0.kn * cn * cn + GS;
+  const double gc = p0.Gnc + (p0.Gsc - p0.Gnc) * std::pow(GS / GT, p0.eta);
+  const double len = 6 * 2 * p0.Gsc / std::min(p0.ft, p0.c);
+  const int n = 400000;
+  CohesivePoint h{0, 0, 0, 0};
+  double work = 0, tn0 = 0, ts0 = 0, dn0 = 0, ds0 = 0, srf_old = 1.0, D = 0;
+  int on_envelope = 0;
+  double dm0_1 = 0;  // the initiation separation at SRF 1
+  for (int i = 1; i <= n; ++i) {
+    const double u = static_cast<double>(i) / n, s = u * u * u;
+    const double srf = 1.0 + 1.5 * std::sqrt(u);  // 1 -> 2.5 along the path, mostly while softening
+    const auto p = reduced(p0, srf_old, srf);
+    srf_old = srf;
+    const double dn = s * len * cn, ds = s * len * cs;
+    double tn, kss;
+    const bool initiated = h.dm0 > 0;
+    fdem::cohesive_update(p, dn, ds, h, tn, kss, D);
+    if (!initiated && h.dm0 > 0) dm0_1 = h.dm0 * srf;
+    const double ts = kss * ds;
+    work += 0.5 * (tn + tn0) * (dn - dn0) + 0.5 * (ts + ts0) * (ds - ds0);
+    if (i % 10000 == 0) {
+      EXPECT_NEAR(fdem::cohesive_stored(p, dn, ds, D) + h.wd, work, 1e-3 * gc) << "step " << i;
+      const double dm = s * len;
+      const double e0 = dm0_1 / srf, ef = 2 * gc / (K * e0);  // envelope of the present strength
+      if (h.dm0 > 0 && dm < ef) {  // (1 - D) K dm on it
+        EXPECT_NEAR(h.dm0 / e0, 1.0, 1e-9) << "step " << i;
+        EXPECT_NEAR(h.dmf / ef, 1.0, 1e-9) << "step " << i;
+        EXPECT_NEAR((1 - D) * K * dm, K * e0 * (ef - dm) / (ef - e0), 1e-6 * p0.ft) << "step " << i;
+        ++on_envelope;
+      }
+    }
+    dn0 = dn; ds0 = ds; tn0 = tn; ts0 = ts;
+  }
+  EXPECT_GT(on_envelope, 5);
+  EXPECT_DOUBLE_EQ(D, 1.0);
+  EXPECT_NEAR(h.wd / work, 1.0, 2e-3);
+  EXPECT_GT(h.wd, gc);
+}
+
+// Damage never heals under a change of strength: far into the softening branch a reduction would
+// lower D (G_c is kept, so dmf grows), and so would a strength that rises again. At a fixed
+// separation, through a sequence of factors up and down, D never falls, stored + dissipated
+// energy stays what the work put in, and where D stays the present secant meets the new envelope
+// at dmax (the point softens further on the new envelope from there).
+TEST(Cohesive, ChangingTheStrengthNeverHealsDamage) {
+  const auto p0 = table1();
+  const double d0 = p0.ft / p0.kn, df = 2 * p0.Gnc / p0.ft;
+  const double d = d0 + 0.8 * (df - d0);
+  CohesivePoint h{0, 0, 0, 0};
+  double tn, kss, D;
+  fdem::cohesive_update(p0, 0.5 * d0, 0.0, h, tn, kss, D);
+  fdem::cohesive_update(p0, d, 0.0, h, tn, kss, D);
+  const double total = fdem::cohesive_stored(p0, d, 0.0, D) + h.wd;
+  double srf_old = 1.0, Dprev = D;
+  int kept = 0;
+  for (double srf : {3.0, 2.0, 1.2, 2.5, 4.0}) {
+    const auto p = reduced(p0, srf_old, srf);
+    srf_old = srf;
+    fdem::cohesive_update(p, d, 0.0, h, tn, kss, D);
+    EXPECT_GE(D, Dprev - 1e-13) << "SRF " << srf;
+    EXPECT_NEAR(fdem::cohesive_stored(p, d, 0.0, D) + h.wd, total, 1e-9 * total) << "SRF " << srf;
+    EXPECT_GE(h.dmax, d);
+    EXPECT_NEAR(h.dm0, d0 / srf, 1e-9 * d0) << "SRF " << srf;  // the envelope of the present strength
+    if (std::fabs(D - Dprev) < 1e-13 && D < 1.0) {
+      ++kept;
+      const double env = p0.kn * h.dm0 * (h.dmf - h.dmax) / (h.dmf - h.dm0);
+      EXPECT_NEAR((1 - D) * p0.kn * h.dmax, env, 1e-6 * p0.ft) << "SRF " << srf;
+    }
+    Dprev = D;
+  }
+  EXPECT_GE(kept, 2);  // the sequence did reach states where the new envelope would heal
+  // a failed point stays failed when the strength rises
+  CohesivePoint f{0, 0, 0, 0};
+  fdem::cohesive_update(p0, 0.5 * d0, 0.0, f, tn, kss, D);
+  fdem::cohesive_update(p0, 1.5 * df, 0.0, f, tn, kss, D);
+  ASSERT_DOUBLE_EQ(D, 1.0);
+  fdem::cohesive_update(reduced(p0, 1.0, 0.5), 1.5 * df, 0.0, f, tn, kss, D);
+  EXPECT_DOUBLE_EQ(D, 1.0);
+  fdem::cohesive_update(reduced(p0, 0.5, 3.0), 1.5 * df, 0.0, f, tn, kss, D);
+  EXPECT_DOUBLE_EQ(D, 1.0);
+}
+
+}  // namespace

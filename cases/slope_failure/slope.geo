@@ -4,7 +4,7 @@
 // The wedge carries interfaces (fracturable), the intact rock below does not.
 // Lengths in m; element size h.
 If (!Exists(h))
-  h = 1.0;
+  h = 4.0;  // the coarsest; the case sets the size it wants (mesh.element_size, an upper bound)
 EndIf
 H = 20; toe = 20; hd = 4; face = 60 * Pi / 180; weak = 35 * Pi / 180; W = 80; B = 10;
 xf = toe + H / Tan(face);          // crest of the slope face

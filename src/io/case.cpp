@@ -1031,9 +1031,17 @@ void read_contact(json& doc, Case& c, const Reader& R) {
 
 void read_damping(json& doc, Case& c, const Reader& R) {
   json& dmp = R.object(doc, "", "damping", false);
-  R.keys(dmp, "damping", {"local", "mass_proportional"});
+  R.keys(dmp, "damping", {"local", "mass_proportional", "change"});
   c.local_damping = R.number(dmp, "damping", "local", between(0, false, 1, true), 0.0);
   c.mass_damping = R.number(dmp, "damping", "mass_proportional", ge(0), 0.0);
+  if (dmp.contains("change")) {
+    json& ch = R.object(dmp, "damping", "change", false);
+    const std::string cp = "damping.change";
+    R.keys(ch, cp, {"time", "local", "mass_proportional"});
+    c.damping_change_time = R.number(ch, cp, "time", ge(0));
+    c.damping_change_local = R.number(ch, cp, "local", between(0, false, 1, true), 0.0);
+    c.damping_change_mass = R.number(ch, cp, "mass_proportional", ge(0), 0.0);
+  }
 }
 
 void read_time(json& doc, Case& c, const Reader& R) {

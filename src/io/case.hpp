@@ -96,6 +96,9 @@ struct Case {
 
   double local_damping = 0;      // alpha, [0, 1)
   double mass_damping = 0;       // c, 1/s
+  // From damping_change_time on (< 0: never) the damping is these instead (e.g. settle under
+  // gravity quasi-statically, then let a failing slope move).
+  double damping_change_time = -1, damping_change_local = 0, damping_change_mass = 0;
 
   double safety_factor = 0.5;    // on the computed stable time step
   double dt = 0;                 // > 0: user time step, used only if below the stable one

@@ -377,6 +377,8 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     const bool chk = c.check_interval > 0 && (sim.step_count + 1) % c.check_interval == 0;
     sim.set_sample_reactions(hist);
     if (srf) sim.set_strength_reduction(srf_at(sim.t));
+    if (c.damping_change_time >= 0 && sim.t >= c.damping_change_time * (1 - 1e-12))
+      sim.set_damping(c.damping_change_local, c.damping_change_mass);
     sim.step(hist || chk);
     if (hist || chk) check();
     last_was_row = hist;

@@ -390,6 +390,7 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   // ---- contact between bodies and fragments ----
   if (contact_wanted(c, mesh)) {
     contact_ = std::make_unique<ContactSystem<D>>(c, mesh, m, mass);
+    mu0_ = contact_->law.mu;
     stable.springs = std::min(stable.springs, contact_->stable_step());
     // with contact, the platens act on every surface node, crack faces included: their springs
     // count with each node's largest possible area
@@ -419,9 +420,25 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
 }
 
 template <int D>
+void Simulation<D>::set_strength_reduction(double factor) {
+  if (!(factor > 0) || !std::isfinite(factor))
+    throw InputError("strength reduction factor must be positive and finite (got " + std::to_string(factor) + ")");
+  srf_ = factor;
+  m.coh.ft = coh0_.ft / factor;
+  m.coh.c = coh0_.c / factor;
+  m.coh.tanphi = coh0_.tanphi / factor;
+  m.coh.rescale = srf_hist_ / factor;
+  if (contact_) contact_->law.mu = mu0_ / factor;
+}
+
+template <int D>
 void Simulation<D>::step(bool sample) {
   sample = sample || !have_reference_;
   compute_forces<D>(m, scatter_);
+  if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
+    m.coh.rescale = 1.0;
+    srf_hist_ = srf_;
+  }
   apply_platens<D>(m, t, dt);
   if (contact_) {
     contact_->update(m, dt);
@@ -733,6 +750,7 @@ void Simulation<D>::save_state(StateArrays& s) const {
   s.f64["simulation/energies"] = energies_to_vector(energies_);
   s.f64["simulation/damping"] = {prm_.alpha, prm_.cmass};
   s.f64["model/cohesive"] = {m.coh.kn, m.coh.ks, m.coh.ft, m.coh.c, m.coh.tanphi, m.coh.Gnc, m.coh.Gsc, m.coh.eta};
+  s.f64["simulation/strength_reduction"] = {srf_, srf_hist_, m.coh.rescale};
   save_view(s, "model/x", m.x);
   save_view(s, "model/v", m.v);
   save_view(s, "model/f", m.f);
@@ -763,6 +781,12 @@ void Simulation<D>::load_state(const StateArrays& s) {
   prm_.cmass = damp[1];
   const auto& ch = s.array("model/cohesive", 8);
   m.coh = CohesiveParams{ch[0], ch[1], ch[2], ch[3], ch[4], ch[5], ch[6], ch[7]};
+  if (s.has("simulation/strength_reduction")) {  // older checkpoints: no reduction applied yet
+    const auto& sr = s.array("simulation/strength_reduction", 3);
+    srf_ = sr[0];
+    srf_hist_ = sr[1];
+    m.coh.rescale = sr[2];
+  }
   load_view(s, "model/x", m.x);
   load_view(s, "model/v", m.v);
   load_view(s, "model/f", m.f);
@@ -779,6 +803,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
   if (contact_) {
     contact_->load_state(s, m);
     sync_platen_nodes();
+    contact_->law.mu = mu0_ / srf_;
   }
 }
 

@@ -100,12 +100,14 @@ class Simulation {
     prm_.cmass = mass_proportional;
   }
 
-  // Divides the interface strengths f_t, c and tan(phi) of the case by `factor` (>= 0).
-  void set_strength_reduction(double factor) {
-    m.coh.ft = coh0_.ft / factor;
-    m.coh.c = coh0_.c / factor;
-    m.coh.tanphi = coh0_.tanphi / factor;
-  }
+  // Strength reduction (slope stability): divides the interface strengths f_t, c and tan(phi) of
+  // the case, and the friction coefficient of the contacts (crack faces of the same rock), by
+  // `factor` (> 0) from the next step on. Points whose damage has initiated follow it: their
+  // softening envelope moves with the strength at the next force computation, the damage rises
+  // at fixed separation and the energy released is fracture dissipation (cohesive_update,
+  // CohesiveParams::rescale). The fracture energies stay.
+  void set_strength_reduction(double factor);
+  double strength_reduction() const { return srf_; }
 
   // Checkpoint: everything in the model and this object that changes during a run (time, step,
   // positions, velocities, forces, interface history and handover flags, platen springs and
@@ -121,6 +123,9 @@ class Simulation {
  private:
   ForceScatter<D> scatter_;
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
+  double mu0_ = 0;         // contact friction coefficient as given
+  double srf_ = 1;         // strength reduction factor now
+  double srf_hist_ = 1;    // the factor the interface histories were last updated under
   std::unique_ptr<ContactSystem<D>> contact_;
   long platen_surface_version_ = -1;  // contact surfaces the platen node list was taken from
   bool warned_inverted_ = false;
