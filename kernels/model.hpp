@@ -60,7 +60,7 @@ struct Model {
   CohesiveParams coh{};
   // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
   // to contact when failed and parted (interface_parted, kernels/step.hpp), or, without contact,
-  // failed and separated (interface_separated). With contact (contact_handover), the force kernel
+  // come apart (interface_apart). With contact (contact_handover), the force kernel
   // sets icontact_pending when it meets a failed, parted interface not handed over yet.
   Kokkos::View<int*> icontact;
   Kokkos::View<int> icontact_pending;

@@ -42,20 +42,24 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
   }
 }
 
-// Without contact (case key contact.enabled = false): a failed interface (every point at D = 1)
-// whose faces have separated: some node pair is farther apart than the A face's inradius (2D:
-// half its length). Its mid-surface, and so the normal of
-// its compressive penalty, is then no longer meaningful (it degenerates when one fragment has
-// turned over against the other, and a penalty along a flipped normal pushes with the force of a
-// millimetre-deep overlap). From the step this is first seen on, the interface carries no force
-// and stores no energy, for good (Model::icontact; switching back on would release whatever
-// overlap its faces reached meanwhile). Faces that stay close (sliding or pressed together) keep
-// the penalty. With contact on, interface_parted below decides instead, and contact takes over.
+// An interface has come apart when one of its failed points (D = 1) has its node pair farther
+// apart than the A face's inradius (2D: half its length). Its mid-surface, and so the normal of
+// its compressive penalty and of whatever cohesion its other points still have, is then no
+// longer meaningful (it degenerates when one fragment has turned over against the other, and a
+// penalty along a flipped normal pushes with the force of a millimetre-deep overlap: in the 3D
+// multi-particle impact an interface whose one corner still held while the other two were 8 mm
+// apart kicked a node to 3.5e4 m/s). From the step this is first seen on, every point of the
+// interface is failed (interface_fail_all) and it carries nothing and stores nothing: without
+// contact (case key contact.enabled = false) for good (Model::icontact; switching back on would
+// release whatever overlap its faces reached meanwhile), with contact until the next handover
+// check makes its faces contact surfaces. Faces that stay close (sliding or pressed together)
+// keep the penalty; with contact, interface_parted below hands them over.
 template <int D>
-KOKKOS_INLINE_FUNCTION bool interface_separated(const double (&xa)[D][D], const double (&xb)[D][D],
-                                                const CohesivePoint (&h)[D]) {
-  for (int k = 0; k < D; ++k)
-    if (cohesive_damage(h[k]) < 1.0) return false;
+KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
+                                            const CohesivePoint (&h)[D]) {
+  bool failed = false;
+  for (int k = 0; k < D; ++k) failed = failed || cohesive_damage(h[k]) >= 1.0;
+  if (!failed) return false;
   double r2;
   if constexpr (D == 2) {
     const double tx = xa[1][0] - xa[0][0], ty = xa[1][1] - xa[0][1];
@@ -76,11 +80,36 @@ KOKKOS_INLINE_FUNCTION bool interface_separated(const double (&xa)[D][D], const 
     r2 = r * r;
   }
   for (int k = 0; k < D; ++k) {
+    if (cohesive_damage(h[k]) < 1.0) continue;
     double d2 = 0;
     for (int i = 0; i < D; ++i) d2 += (xb[k][i] - xa[k][i]) * (xb[k][i] - xa[k][i]);
     if (d2 > r2) return true;
   }
   return false;
+}
+
+// Fails every point of an interface that has come apart (interface_apart): a point that still
+// holds releases the elastic energy it stores at its present separation, booked as fracture
+// dissipation (its remaining fracture energy is never spent: the crack has run past it).
+template <int D>
+KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const double (&xb)[D][D], double ap,
+                                               const CohesiveParams& p, CohesivePoint (&h)[D]) {
+  double n[D], ap_cur;
+  interface_frame<D>(xa, xb, 1.0, n, ap_cur);
+  for (int k = 0; k < D; ++k) {
+    const double dmg = cohesive_damage(h[k]);
+    if (dmg >= 1.0) continue;
+    double d[D], dn = 0, ds2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+    }
+    for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
+    h[k].wd += ap * cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);
+    if (!(h[k].dm0 > 0.0)) h[k].dm0 = 1e-300;  // never initiated: initiated now
+    if (!(h[k].dmf > h[k].dm0)) h[k].dmf = 2.0 * h[k].dm0;
+    h[k].dmax = h[k].dmax > h[k].dmf ? h[k].dmax : h[k].dmf;
+  }
 }
 
 // A failed interface is handed over to contact once its faces have parted: open (normal gap >= 0
@@ -235,10 +264,18 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
               h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
             }
             // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
-            // without contact, separated for good: interface_separated).
+            // without contact, come apart for good: interface_apart).
             if (icontact(q)) continue;
-            if (!handover && interface_separated<D>(xa, xb, h)) {
-              icontact(q) = 1;
+            if (interface_apart<D>(xa, xb, h)) {
+              interface_fail_all<D>(xa, xb, iarea(q), coh, h);
+              for (int k = 0; k < D; ++k) {
+                ihist(q, k, 0) = h[k].dmax;
+                ihist(q, k, 1) = h[k].dm0;
+                ihist(q, k, 2) = h[k].dmf;
+                ihist(q, k, 3) = h[k].wd;
+              }
+              if (handover) Kokkos::atomic_exchange(&pending(), 1);
+              else icontact(q) = 1;
               continue;
             }
             const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);

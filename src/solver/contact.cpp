@@ -489,7 +489,9 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
             xa[k][i] = x(iface(q, k), i);
             xb[k][i] = x(iface(q, D + k), i);
           }
-        if (interface_parted<D>(xa, xb, slip)) {
+        CohesivePoint h[D];
+        for (int k = 0; k < D; ++k) h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+        if (interface_parted<D>(xa, xb, slip) || interface_apart<D>(xa, xb, h)) {
           icontact(q) = 1;
           ++cnt;
         }
