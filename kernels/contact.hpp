@@ -992,14 +992,18 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
         const double Anode = S.narea(s);
         // 0. the depth of each contact at the last step (for the allowance of contacts that start)
         for (int j = b; j < e; ++j) sdep(j) = pfn(j) > 0.0 ? pfn(j) / (L.kn * kmath::sqrt(pac(j))) : -1.0;
-        // 1. free elements (a node's candidates are sorted by element: the depth is computed
-        //    once per element) are handled at once; the other faces get their gap, normal and
-        //    fade at the face's edge (0: not near) for step 2
-        int last_e = -1, last_a = -1, nface_form = 0;
+        // 1. the weight of every pair (sw: 0 not in contact; sphi < 0 marks a free element's).
+        //    Free elements (a node's candidates are sorted by element: the depth is computed
+        //    once per element): weight 1 through the nearest face when the node is inside. Other
+        //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
+        int last_e = -1, last_a = -1;
         double last_d = 0.0;
         for (int j = b; j < e; ++j) {
           const int fc = pface(j);
           const int own = S.fowner(fc);
+          double n[D], N[D];
+          const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
+          sg(j) = g;
           if (S.efree(own)) {  // a free element: contact through its nearest face, if inside
             if (own != last_e) {
               last_e = own;
@@ -1009,30 +1013,20 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
             }
             bool mine = last_d > 0.0 && last_d < L.dpen;
             for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
-            const double lim =
-                mine && !(sdep(j) >= 0.0) ? related_depth<D>(S, pface, sdep, b, e, fc) / kmath::sqrt(Anode) : 0.0;
-            contact_pair<D, Fric>(S, L, v, f, pfn, pac, pg0, pfs, j, s, fc, xs, vs, mine ? Anode : 0.0, lim, 0.0,
-                                  dt, sums);
-            sphi(j) = -1.0;  // done
+            sw(j) = mine ? 1.0 : 0.0;
+            sphi(j) = -1.0;
             continue;
           }
-          ++nface_form;
-          double n[D], N[D];
-          const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
           double score = N[0];
           for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
           const bool near = g > -L.dpen && g < L.dpen;
           double phi = near ? contact_fade(score, L.tol) : 0.0;
           if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
-          sg(j) = g;
           sphi(j) = phi;
           for (int k = 0; k < D; ++k) sn(j, k) = n[k];
         }
-        if (nface_form == 0) return;
         // 2. the other faces: each penetrated near face is a contact, its weight shared among
-        //    the near coplanar faces of its piece; the energy a contact releases as its weight
-        //    falls may go to a related one whose weight rises (a node moving from one face of a
-        //    piece to the next)
+        //    the near coplanar faces of its piece
         for (int j = b; j < e; ++j) {
           if (sphi(j) < 0.0) continue;
           const int fc = pface(j);
@@ -1051,11 +1045,15 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
             w = sphi(j) / (sum > 1.0 ? sum : 1.0);
           }
           sw(j) = w;
-          const double ge = sg(j) - pg0(j), Aw = Anode * w;
+        }
+        // 3. what the weight changes release (the budget of rising ones, step 4)
+        for (int j = b; j < e; ++j) {
+          const double ge = sg(j) - pg0(j), Aw = Anode * sw(j);
           srel(j) = pfn(j) > 0.0 && Aw < pac(j) && ge < 0.0 ? 0.5 * L.kn * (pac(j) - Aw) * ge * ge : 0.0;
         }
+        // 4. the contacts; the energy a contact released as its weight fell may go to a related
+        //    one whose weight rises (a node moving from one face of a piece onto the next)
         for (int j = b; j < e; ++j) {
-          if (sphi(j) < 0.0) continue;
           const int fc = pface(j);
           const double w = sw(j);
           const double lim =

@@ -43,8 +43,9 @@ class ContactSystem {
   // Hands every failed interface over now (update() does it when the force kernel flags one).
   void check_failures(const Model<D>& m);
 
-  // Smallest stable step of the contact springs, 2 / omega with omega^2 = max(K_n, K_s) A / m per
-  // surface node (A: its tributary area on all faces that can become surfaces, m: its mass).
+  // Smallest stable step of the contact springs, 2 / omega with omega^2 = 2 max(K_n, K_s) A / m
+  // per surface node (A: its tributary area on all faces that can become surfaces, m: its mass;
+  // 2: the mass on the other side, see the constructor).
   double stable_step() const { return stable_; }
   // Elastic energy in the contact springs at the last update.
   double elastic_energy() const;
