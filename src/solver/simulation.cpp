@@ -759,6 +759,7 @@ void Simulation<D>::save_state(StateArrays& s) const {
   if (m.icontact_pending.data()) save_view(s, "model/icontact_pending", m.icontact_pending);
   save_view(s, "model/platen_fs", m.platen_fs);
   save_view(s, "model/platen_g0", m.platen_g0);
+  if (m.barea.extent(0) > 0) save_view(s, "model/platen_area", m.barea);
   save_view(s, "model/platen_acc", m.platen_acc);
   if (contact_) contact_->save_state(s);
 }
@@ -795,6 +796,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
   if (m.icontact_pending.data()) load_view(s, "model/icontact_pending", m.icontact_pending);
   load_view(s, "model/platen_fs", m.platen_fs);
   load_view(s, "model/platen_g0", m.platen_g0);
+  if (m.barea.extent(0) > 0) load_view(s, "model/platen_area", m.barea);
   load_view(s, "model/platen_acc", m.platen_acc);
   if (contact_ && !s.has("contact/pair_count"))
     throw InputError("checkpoint '" + s.file + "' has no contact state but this case has contact");
