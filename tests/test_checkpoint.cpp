@@ -62,8 +62,11 @@ std::string tmpdir(const std::string& name) {
 
 const std::string kUniaxial = std::string(FDEM_SOURCE_DIR) + "/cases/uniaxial_compression/case.json";
 const std::string kUniaxialSets =
-    " --set parameters.cell=0.01 --set parameters.rate=0.5 --set time.stop.drop_fraction=0.95";
-constexpr double kUniaxialEvery = 1.97e-4;  // checkpoints at 0.197, 0.394, 0.591, 0.788 ms (the 4th: fragments in contact)
+    " --set parameters.cell=0.01 --set parameters.rate=0.5 --set time.stop.drop_fraction=0.999"
+    " --set time.end_time=1e-3";  // to 1 ms (two threads stopped at 0.88 ms by a 95 % load drop)
+// checkpoints at 0.23, 0.46, 0.69, 0.92 ms; by the 4th, fragments are in contact (the first
+// contacts start at 0.84 ms)
+constexpr double kUniaxialEvery = 2.3e-4;
 
 // fdem run of a case with `threads` OpenMP threads; extra: more options; env: environment.
 // Waiting threads sleep (OMP_WAIT_POLICY=passive): on a loaded machine spinning threads make a
@@ -210,7 +213,7 @@ Results CheckpointRestart::ref_;
 
 TEST_F(CheckpointRestart, KilledAfterCheckpointRestartsBitwise) {
   ASSERT_EQ(ref_.frame_names.size(), 10u);
-  ASSERT_EQ(ref_.summary["steps"], 8780);
+  ASSERT_EQ(ref_.summary["steps"], 12233);
   ASSERT_GT(ref_.summary["interfaces_failed"].get<long>(), 10);
 
   const std::string out = tmpdir("after");
@@ -241,7 +244,7 @@ TEST_F(CheckpointRestart, KilledAfterCheckpointRestartsBitwise) {
   const Results r = results(out);
   EXPECT_EQ(differ(ref_, r), "");
   const auto s = nlohmann::json::parse(slurp(out + "/summary.json"));
-  EXPECT_EQ(s["checkpoint"]["restarted_from"]["step"], 5853);
+  EXPECT_EQ(s["checkpoint"]["restarted_from"]["step"], 8155);
   EXPECT_EQ(s["checkpoint"]["written"], 6);  // 4 before the kill, 2 after the restart
 }
 
@@ -357,22 +360,39 @@ TEST(CheckpointRestartContact, FragmentsInContactRestartBitwise) {
 }
 
 // With two threads the contact forces are added with atomics, so the order of additions (and
-// the last bits) may differ from run to run; in practice runs of these cases have been identical.
-// The restarted run must match whenever two uninterrupted runs match each other.
+// the last bits) differ from run to run: two uninterrupted runs of this case differ by about
+// 1e-15 m/s in a few velocities of the last frames (measured), at random. So the restarted run
+// must match the uninterrupted one bit for bit or within 1e-9 of each field's largest value in
+// every frame, with the same steps and failed interfaces; a state the restart lost (a contact's
+// spring or friction history, an interface's damage) shows far above that.
+double largest_gap(const std::vector<std::vector<double>>& a, const std::vector<std::vector<double>>& b) {
+  if (a.size() != b.size()) return 1e300;
+  double gap = 0;
+  for (size_t k = 0; k < a.size(); ++k) {
+    if (a[k].size() != b[k].size()) return 1e300;
+    double big = 0, d = 0;
+    for (size_t i = 0; i < a[k].size(); ++i) {
+      big = std::max(big, std::fabs(a[k][i]));
+      d = std::max(d, std::fabs(a[k][i] - b[k][i]));
+    }
+    gap = std::max(gap, big > 0 ? d / big : d);
+  }
+  return gap;
+}
+
 TEST(CheckpointRestartContact, TwoThreadsRestartMatchesUninterrupted) {
   const std::string a = tmpdir("two_a"), b = tmpdir("two_b");
   ASSERT_EQ(run_uniaxial(a, 2), 0) << slurp(a + ".log");
   ASSERT_EQ(run_uniaxial(b, 2, every(kUniaxialEvery), "FDEM_TEST_CHECKPOINT_KILL=after:4"), 128 + 9);
   ASSERT_EQ(run_uniaxial(b, 2, "--restart " + b + "/checkpoint.h5"), 0) << slurp(b + ".log");
   const Results ra = results(a), rb = results(b);
-  const std::string d = differ(ra, rb);
-  if (!d.empty()) {
-    const std::string a2 = tmpdir("two_a2");
-    ASSERT_EQ(run_uniaxial(a2, 2), 0);
-    if (!differ(ra, results(a2)).empty())
-      GTEST_SKIP() << "two-thread runs of this case are not reproducible here (contact atomics): " << d;
-    FAIL() << "restarted two-thread run differs from the uninterrupted one: " << d;
-  }
+  if (differ(ra, rb).empty()) return;
+  ASSERT_EQ(ra.frame_names, rb.frame_names);
+  EXPECT_EQ(ra.summary["steps"], rb.summary["steps"]);
+  EXPECT_EQ(ra.summary["interfaces_failed"], rb.summary["interfaces_failed"]);
+  EXPECT_LE(largest_gap(ra.x, rb.x), 1e-9) << differ(ra, rb);
+  EXPECT_LE(largest_gap(ra.v, rb.v), 1e-9) << differ(ra, rb);
+  EXPECT_LE(largest_gap(ra.damage, rb.damage), 1e-9) << differ(ra, rb);
 }
 
 // Strength reduction (slope stability): the factor the interface histories were last updated

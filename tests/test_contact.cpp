@@ -767,13 +767,17 @@ void heap_test(HostMesh block, HostMesh floor, double hsize, double t_end, doubl
   double worst = 0;
   long checks = 0;
   // runs to t_end, then on until settled (kinetic energy below 0.1 % of the work of gravity) or
-  // 2 t_end: the pieces tumble chaotically, and when the last one comes to rest varies with the
-  // thread schedule (atomic sums in another order: measured 4e-8 to 1.6e-3 of the work at t_end)
-  bool settled = false;
-  while (sim.t < t_end || (!settled && sim.t < 2 * t_end)) {
+  // 4 t_end: the pieces tumble chaotically, and when the last one comes to rest varies with the
+  // thread schedule (atomic sums in another order: measured 4e-8 to 1.6e-3 of the work at t_end;
+  // in 2D one run in six still had 3e-3 at 2 t_end)
+  // "settled" means at three checks in a row (6000 steps): a piece resting on an edge can still
+  // topple after one quiet check (measured: 3e-4 of the work at a check, 3e-2 at the next)
+  int quiet = 0;
+  auto settled = [&] { return quiet >= 3; };
+  while (sim.t < t_end || (!settled() && sim.t < 4 * t_end)) {
     sim.step(sim.step_count % 500 == 0);
     if (sim.step_count % 2000 == 0) {
-      settled = sim.energies().kinetic < 1e-3 * sim.energies().work_external;
+      quiet = sim.energies().kinetic < 1e-3 * sim.energies().work_external ? quiet + 1 : 0;
       sim.check_stability();
       // pieces: floor elements are one piece, every block element its own
       std::vector<int> piece(mesh.num_elems());
@@ -788,12 +792,13 @@ void heap_test(HostMesh block, HostMesh floor, double hsize, double t_end, doubl
   const double z1 = hs.mean(nodes, true)[D - 1];
   const Energies& e = sim.energies();
   std::printf("%dD heap: deepest penetration %.3g h, centre of mass down by %.3g h, kinetic energy "
-              "%.3g of the work of gravity, balance error %.3g, friction %.3g J\n",
-              D, worst / hsize, (z0 - z1) / hsize, e.kinetic / e.work_external,
+              "%.3g of the work of gravity at %.3g s, balance error %.3g, friction %.3g J\n",
+              D, worst / hsize, (z0 - z1) / hsize, e.kinetic / e.work_external, sim.t,
               e.balance_error / e.work_external, e.friction);
   EXPECT_GT(checks, 3);
   EXPECT_LT(worst, 0.01 * hsize) << "deepest node inside another piece";
   EXPECT_LT(z1, z0 - 0.05 * hsize) << "the cracked block did not collapse";
+  EXPECT_TRUE(settled()) << "kinetic energy not below 1e-3 of the work of gravity at three checks in a row";
   EXPECT_LT(e.kinetic, 1e-3 * e.work_external) << "not settled";
   // The energy balance closes to a few per mille, not to round-off: the fade and facing weights of
   // a contact (kernels/contact.hpp) depend on positions and the force does not include their
