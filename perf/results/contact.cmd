@@ -1,0 +1,1 @@
+build/openmp/perf/bench_contact 80 12 200
