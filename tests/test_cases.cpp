@@ -101,6 +101,7 @@ TEST(CaseBrazilianDisc, ReducedRunGivesInputStrengthAndCentralSplit) {
   EXPECT_GT(ymax, R / 3) << "the split does not cross the centre";
   EXPECT_LT(sum_abs_x / n, R / 3) << "mean distance of the central failed interfaces from the loaded diameter";
   fs::remove_all(out);
+  fs::remove(out + ".log");
 }
 
 }  // namespace
@@ -168,6 +169,7 @@ TEST(CaseSlope, ReducedRunFailsNearTheLimitEquilibriumFactorAndSlides) {
   const auto s = nlohmann::json::parse(slurp(out + "/summary.json"));
   EXPECT_LT(s["energy"]["max_relative_balance_error"].get<double>(), 0.02);
   fs::remove_all(out);
+  fs::remove(out + ".log");
 }
 
 }  // namespace
@@ -271,6 +273,7 @@ TEST(CaseUniaxial, ReducedRunFollowsTheCrossedMeshModulusAndFailsInAnX) {
     EXPECT_GT(along[k], 0.5 * diag[k]) << "quadrant " << k << ": " << along[k] << " of " << diag[k];
   }
   fs::remove_all(r.out);
+  fs::remove(r.out + ".log");
 }
 
 // phi = 30 degrees and frictionless platens: the stress stays uniform, every diagonal interface
@@ -289,6 +292,7 @@ TEST(CaseUniaxial, FrictionlessAtThirtyDegreesFailsAtTheDiagonalStrength) {
   const double lat = Ee * (nu * (1 + nu) / E + (1 / ks - 1 / kn) / (std::sqrt(2.0) * d));
   EXPECT_NEAR(r.lateral / lat, 1.0, 0.05) << "lateral over axial strain " << r.lateral;
   fs::remove_all(r.out);
+  fs::remove(r.out + ".log");
 }
 
 }  // namespace
@@ -361,6 +365,7 @@ TEST(CaseSenBeam, ReducedRunCracksFromTheNotchTip) {
   EXPECT_LT(xfar, 0.040) << "damage away from the notch (under the load or at a support)";
   EXPECT_GE(failed_near, 1);
   fs::remove_all(out);
+  fs::remove(out + ".log");
 }
 
 }  // namespace

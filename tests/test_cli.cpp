@@ -91,6 +91,8 @@ TEST(Cli, RunWritesHistorySummaryAndSnapshots) {
         << slurp(out + ".check");
   }
   fs::remove_all(out);
+  fs::remove(out + ".check");
+  fs::remove(out + ".log");
 }
 
 TEST(Cli, CheckAcceptsGoodCaseAndRejectsBadOne) {
@@ -116,6 +118,7 @@ TEST(Cli, UnstableRunStopsWithExitStatus3) {
   EXPECT_EQ(rc, 3) << slurp(out + ".log");
   EXPECT_NE(slurp(out + ".log").find("step"), std::string::npos);
   fs::remove_all(out);
+  fs::remove(out + ".log");
 }
 
 }  // namespace
