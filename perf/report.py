@@ -519,6 +519,13 @@ class Report:
         self.w(f"`fdem run {d['case']} --set mesh.element_size=D --set parameters.rate=V` (perf/sweep_brazil.py), "
                f"OMP_NUM_THREADS = {runs[0]['threads'] if runs else '?'}; error of `results.tensile_strength_Pa` "
                f"against the input f_t = {ft / 1e6:g} MPa; wall time from summary.json (set-up, run and output).")
+        every = d["runs"] + d.get("left_out", [])
+        sizes = sorted({r["element_size_m"] for r in every}, reverse=True)
+        rates = sorted({r["rate_m_per_s"] for r in every}, reverse=True)
+        self.w()
+        self.w("This sweep: `perf/sweep_brazil.py --sizes " + ",".join(f"{x:g}" for x in sizes) + " --rates " +
+               ",".join(f"{x:g}" for x in rates) + "` (the sizes and rates of brazil.json; `perf/run_all` "
+               "uses its own lists).")
         self.w()
         # Pareto front: no other run has both less error and less time
         for r in runs:
