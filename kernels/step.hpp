@@ -387,7 +387,10 @@ struct NodeUpdateParams {
   double gravity[3];
   double alpha;      // local non-viscous damping
   double cmass;      // mass-proportional damping (1/s)
-  double t, dt;      // time of the current positions, step
+  double t, dt;      // time of the current positions, step to the next positions
+  // Velocity step: the time between v(n-1/2) and v(n+1/2), (dt_old + dt) / 2; = dt except on the
+  // step where dt changes (Simulation: contact's stable step applies once surfaces can meet).
+  double dtv;
   bool has_fext;
 };
 
@@ -423,17 +426,17 @@ struct NodeUpdate {
       if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
         const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
         vn = bcs(bc).vel[k] * r;
-        s.v[1] += (mi * (vn - vo) / p.dt - F) * 0.5 * (vo + vn) * p.dt;
+        s.v[1] += (mi * (vn - vo) / p.dtv - F) * 0.5 * (vo + vn) * p.dtv;
       } else if (Damp) {
         double fd = -p.cmass * mi * vo;
         if (p.alpha > 0) {
           const double fu = F + fd;
           fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
         }
-        vn = vo + p.dt * (F + fd) / mi;
-        s.v[0] -= fd * 0.5 * (vo + vn) * p.dt;
+        vn = vo + p.dtv * (F + fd) / mi;
+        s.v[0] -= fd * 0.5 * (vo + vn) * p.dtv;
       } else {
-        vn = vo + p.dt * F / mi;
+        vn = vo + p.dtv * F / mi;
       }
       if (Sample) {
         const double u = x(i, k) - X(i, k);

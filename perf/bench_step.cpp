@@ -289,6 +289,7 @@ struct SceneOptions {
   int contact = -1;  // case rule: -1 auto, 0 off, 1 on
   bool fix_face = true;
   double friction = -1;  // contact friction (< 0: derived, tan phi)
+  bool contact_step_now = false;  // contact's stable step from the start (the skip forced off)
 };
 
 Case make_case(int dim, double h, const SceneOptions& so) {
@@ -583,18 +584,23 @@ json run_skips(double target, const Options& o) {
   auto make = [&](SceneOptions so) -> Simulation<D>& {
     sims.push_back(std::make_unique<Simulation<D>>(make_case(D, h, so), mesh));
     Simulation<D>& s = *sims.back();
+    if (so.contact_step_now) s.use_contact_step_now();
     shake(s, 1e-3);
     for (int k = 0; k < 5; ++k) s.step(k == 0);
     return s;
   };
   std::vector<Variant> vs;
-  {  // contact: nothing can meet (one intact body) -> no search
-    SceneOptions on, off;
+  {  // contact: nothing can meet (one intact body) -> no search, and the step without contact springs
+    SceneOptions on, off, forced;
     off.contact = 0;
+    forced.contact_step_now = true;
     Simulation<D>& a = make(off);
     Simulation<D>& b = make(on);
+    Simulation<D>& b2 = make(forced);
     vs.push_back({"contact", "contact off", "reference", [&a]() { a.step(false); }, a.dt});
     vs.push_back({"contact", "contact on, nothing can meet", "skip", [&b]() { b.step(false); }, b.dt});
+    vs.push_back({"contact", "contact on, nothing can meet, contact step from the start", "no skip (forced)",
+                  [&b2]() { b2.step(false); }, b2.dt});
   }
   {  // damping
     SceneOptions z, zfull, d;

@@ -82,7 +82,9 @@ nlohmann::json run_quiet(const std::string& path, const std::vector<std::string>
 
 // Momentum through an impact, step by step: constant before contact and after the fragments
 // have left the plate, and P(N) - P(0) = plate impulse = sum of dt (F_n + F_{n+1}) / 2 (the
-// leap-frog's momentum at x(n) is sum m (v(n-1/2) + v(n+1/2)) / 2).
+// leap-frog's momentum at x(n) is sum m (v(n-1/2) + v(n+1/2)) / 2; dt of each F_n: its velocity
+// step, which differs from the step before and after on the step where contact's stable step
+// applies).
 template <int D>
 void momentum_through_impact(const std::string& path, const std::vector<std::string>& overrides,
                              int min_fragments, int max_fragments) {
@@ -94,9 +96,11 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
   std::vector<std::array<double, 3>> F;
   std::vector<std::array<double, 3>> P;
   std::vector<long> sampled;
+  std::vector<double> DT;  // each step's velocity step (the step shortens once interfaces fail)
   auto sample = [&]() {
     sim.step(true);
     F.push_back(sim.platen_force(0));
+    DT.push_back(sim.last_velocity_step());
     P.push_back({sim.energies().momentum[0], sim.energies().momentum[1], sim.energies().momentum[2]});
     sampled.push_back(sim.step_count - 1);
   };
@@ -105,13 +109,13 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
   ASSERT_LT(p0, 0.0);
   // before the plate: no force, momentum constant
   long first_contact = -1, last_contact = -1;
-  const long nsteps = static_cast<long>(std::ceil(c.end_time / sim.dt));
-  for (long n = 1; n < nsteps; ++n) {
+  for (long n = 1; sim.t < c.end_time * (1 - 1e-12); ++n) {
     if (n % 50 == 0) {
       sample();
     } else {
       sim.step(false);
       F.push_back(sim.platen_force(0));
+      DT.push_back(sim.last_velocity_step());
     }
     const bool touching = F.back()[0] != 0 || F.back()[1] != 0 || F.back()[2] != 0;
     if (touching && first_contact < 0) first_contact = n;
@@ -130,9 +134,8 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
   for (size_t s = 1; s < sampled.size(); ++s) {
     const long N = sampled[s];
     for (int k = 0; k < D; ++k) {
-      double J = 0.5 * (F[0][k] + F[N][k]);
-      for (long n = 1; n < N; ++n) J += F[n][k];
-      J *= sim.dt;
+      double J = 0.5 * (F[0][k] * DT[0] + F[N][k] * DT[N]);
+      for (long n = 1; n < N; ++n) J += F[n][k] * DT[n];
       impulse_max = std::max(impulse_max, std::fabs(J));
       worst = std::max(worst, std::fabs(P[s][k] - P[0][k] - J));
     }
@@ -172,10 +175,12 @@ void momentum_through_impact(const std::string& path, const std::vector<std::str
 // initiation on the envelope (be6b5df) moved the breakage threshold).
 
 TEST(Impact, MomentumChangesOnlyByPlateImpulse2D) {
-  // 4 m/s: the disc cracks from the contact, a few pieces break off (3 fragments) and all of them
-  // rebound (with contact: plate contact from step 502 to 4034 of 5200, momentum -84.6 -> +37.6 N s)
-  momentum_through_impact<2>(kCase2D, {"parameters.speed=4", "parameters.h=0.006",
-                                       "parameters.duration=400e-6"},
+  // 5 m/s: the disc cracks from the contact, pieces break off and all of them rebound by 0.5 ms.
+  // (Close to the threshold the fragment count follows the time step chaotically: 4 m/s gave 1 or
+  // 2 fragments for steps from 4e-8 to 6e-8 s, 5 m/s 2 to 5; this test passes with both the
+  // step that shortens when the first interface fails and the contact step from the start.)
+  momentum_through_impact<2>(kCase2D, {"parameters.speed=5", "parameters.h=0.006",
+                                       "parameters.duration=500e-6"},
                              2, 10);
 }
 
@@ -254,12 +259,11 @@ void fragmenting_impact_with_contact(const std::string& path, const std::vector<
   sim.step(true);
   const double e0 = sim.energies().kinetic;
   const double plate = c.platens[0].point[D - 1];
-  const long nsteps = static_cast<long>(std::ceil(c.end_time / sim.dt));
   double worst_err = 0, deepest = 0, beyond = 0;
   auto x = Kokkos::create_mirror_view(sim.m.x);
   auto g0 = Kokkos::create_mirror_view(sim.m.platen_g0);
   auto area = Kokkos::create_mirror_view(sim.m.barea);
-  for (long n = 1; n < nsteps; ++n) {
+  for (long n = 1; sim.t < c.end_time * (1 - 1e-12); ++n) {
     const bool sample = n % 100 == 0;
     sim.step(sample);
     if (!sample) continue;
@@ -279,9 +283,13 @@ void fragmenting_impact_with_contact(const std::string& path, const std::vector<
               "below the plate %.3g h (surface nodes: %.3g h beyond their allowance), %ld interfaces failed, %d "
               "fragments, %d "
               "contacts at the end\n",
-              D, nsteps, e0, worst_err, 100 * worst_err / e0, deepest / h, beyond / h, sim.energies().failed,
+              D, sim.step_count, e0, worst_err, 100 * worst_err / e0, deepest / h, beyond / h, sim.energies().failed,
               st.count, sim.contact()->active_contacts());
-  EXPECT_LT(worst_err, 0.02 * e0) << "energy balance";
+  // 3D at 20 m/s: 1.0 to 1.9 % measured over safety factors 0.19 to 0.21, with the step that
+  // shortens at the first handover and with the contact step from the start (the fragmentation
+  // is chaotic: 70 to 86 fragments); the contact weights' position derivatives are not in the
+  // force (docs/theory.md). 2D: 0.2 %.
+  EXPECT_LT(worst_err, 0.03 * e0) << "energy balance";
   EXPECT_LT(beyond, 0.005 * h) << "a node went through the plate";
   EXPECT_LT(deepest, 0.1 * h);
   EXPECT_GE(st.count, min_fragments) << "the particle did not break";

@@ -129,12 +129,12 @@ void contact_idle_scene() {
   c.interface_materials = {fdem_test::strong_interface(30e9 / (0.1 * 0.01), 30e9 / (0.25 * 0.01))};
   c.fracture_material = 0;
   c.local_damping = 0.1;
-  // the same time step for both (contact's springs take part in the stable step)
+  // the same time step for both: contact's springs do not shorten it while nothing can meet
   auto c_off = c;
   c_off.contact.enabled = 0;
-  c.dt = c_off.dt = std::min(Simulation<D>(c, mesh).dt, Simulation<D>(c_off, mesh).dt);
   Simulation<D> on(c, mesh), off(c_off, mesh);
   ASSERT_EQ(on.dt, off.dt);
+  EXPECT_TRUE(on.stable.contact_pending);
   ASSERT_NE(on.contact(), nullptr);
   ASSERT_EQ(off.contact(), nullptr);
   shake(on, 0.5);
@@ -152,6 +152,55 @@ void contact_idle_scene() {
 
 TEST(Skips, ContactWhileNothingCanMeetGivesTheSameResults2D) { contact_idle_scene<2>(); }
 TEST(Skips, ContactWhileNothingCanMeetGivesTheSameResults3D) { contact_idle_scene<3>(); }
+
+template <int D>
+void fail_all_interfaces(Simulation<D>& sim);
+
+// The step of idle contact: the springs of contacts (and of the platens on crack faces) count in
+// the stable step only from the step on which surfaces can meet. Before: the step without contact.
+// Then: the safety factor times the critical step with contact, with the velocity step of the
+// change (dt_old + dt_new) / 2 (leap-frog with a step change). Momentum and energy through the
+// change: Impact.* (a fragmenting impact changes the step when its first interface fails).
+template <int D>
+void contact_step_scene() {
+  const HostMesh mesh = cracked_block<D>(D == 2 ? 4 : 2);
+  auto c = fdem_test::basic_case(D, 30e9, 0.2, 2500);
+  c.interface_materials = {fdem_test::strong_interface(30e9 / (0.1 * 0.01), 30e9 / (0.25 * 0.01))};
+  c.fracture_material = 0;
+  auto c_off = c;
+  c_off.contact.enabled = 0;
+  Simulation<D> sim(c, mesh), off(c_off, mesh);
+  ASSERT_NE(sim.contact(), nullptr);
+  ASSERT_TRUE(sim.stable.contact_pending);
+  EXPECT_EQ(sim.dt, off.dt);
+  EXPECT_DOUBLE_EQ(sim.dt, c.safety_factor * off.stable.critical);
+  // the contact springs are stiffer than the interfaces' (about twice the area, both masses)
+  EXPECT_LT(sim.stable.critical_contact, 0.9 * sim.stable.critical);
+  const double dt0 = sim.dt, crit_c = sim.stable.critical_contact;
+  shake(sim, 0.5);
+  for (int s = 0; s < 50; ++s) sim.step(s == 0);
+  EXPECT_EQ(sim.dt, dt0);
+  EXPECT_EQ(sim.dt_changed_at(), -1);
+  EXPECT_EQ(sim.last_velocity_step(), dt0);
+  fail_all_interfaces(sim);  // the pieces come apart: surfaces can meet
+  ASSERT_TRUE(sim.contact()->may_meet());
+  const long n = sim.step_count;
+  sim.step(true);
+  EXPECT_EQ(sim.dt_changed_at(), n);
+  EXPECT_DOUBLE_EQ(sim.dt, c.safety_factor * crit_c);
+  EXPECT_DOUBLE_EQ(sim.stable.critical, crit_c);
+  EXPECT_FALSE(sim.stable.contact_pending);
+  EXPECT_DOUBLE_EQ(sim.last_velocity_step(), 0.5 * (dt0 + sim.dt));
+  EXPECT_DOUBLE_EQ(sim.dt_before_change(), dt0);
+  const double dt1 = sim.dt;
+  for (int s = 0; s < 1000; ++s) sim.step(false);
+  EXPECT_NO_THROW(sim.check_finite());
+  EXPECT_EQ(sim.dt, dt1);
+  EXPECT_EQ(sim.last_velocity_step(), dt1);
+}
+
+TEST(Skips, ContactStepAppliesOnceSurfacesCanMeet2D) { contact_step_scene<2>(); }
+TEST(Skips, ContactStepAppliesOnceSurfacesCanMeet3D) { contact_step_scene<3>(); }
 
 // ---- no friction history when friction is off ----
 

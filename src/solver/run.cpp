@@ -76,6 +76,12 @@ class Progress {
   void done() {
     if (on_ && tty_) std::fprintf(stderr, "\n");
   }
+  // A line of its own between progress updates.
+  void note(const std::string& line) {
+    if (!on_) return;
+    std::fprintf(stderr, "%s%s\n", tty_ ? "\r" : "", line.c_str());
+    std::fflush(stderr);
+  }
 
  private:
   bool on_, tty_;
@@ -100,10 +106,18 @@ nlohmann::json mesh_report(const HostMesh& mesh) {
 
 template <int D>
 nlohmann::json stable_report(const Simulation<D>& sim) {
-  return {{"dt_s", sim.dt},
-          {"dt_critical_s", sim.stable.critical},
-          {"dt_bulk_s", sim.stable.bulk},
-          {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
+  nlohmann::json j = {{"dt_s", sim.dt},
+                      {"dt_critical_s", sim.stable.critical},
+                      {"dt_bulk_s", sim.stable.bulk},
+                      {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
+  // with contact that cannot act yet: the step once surfaces can meet
+  if (sim.stable.contact_pending) j["dt_critical_with_contact_s"] = sim.stable.critical_contact;
+  // the step changed during the run (contact's springs applied)
+  if (sim.dt_changed_at() >= 0) {
+    j["dt_before_contact_s"] = sim.dt_before_change();
+    j["dt_changed_at_step"] = sim.dt_changed_at();
+  }
+  return j;
 }
 
 // What identifies a run for a restart (checkpoint header).
@@ -310,6 +324,9 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
     std::fprintf(stderr, "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); %.0f steps to end_time\n",
                  c.name.c_str(), sim.m.nn, sim.m.ne, sim.m.ni, sim.dt, sim.dt / sim.stable.critical,
                  sim.stable.critical, std::ceil(c.end_time / sim.dt));
+    if (sim.stable.contact_pending)
+      std::fprintf(stderr, "fdem: contact springs act once surfaces can meet (first failed interface); the critical step "
+                           "is then %.3e s\n", sim.stable.critical_contact);
   }
   const std::string ckpt_path = out + "/checkpoint.h5";
   auto loop0 = Clock::now();
@@ -381,6 +398,14 @@ nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& o
       sim.set_damping(c.damping_change_local, c.damping_change_mass);
     sim.step(hist || chk);
     if (hist || chk) check();
+    if (sim.dt_changed_at() == sim.step_count - 1) {
+      char line[256];
+      std::snprintf(line, sizeof line,
+                    "fdem: step %ld, t = %.4e s: surfaces can meet, contact springs act: dt = %.3e -> %.3e s "
+                    "(critical %.3e s)",
+                    sim.dt_changed_at(), sim.t, sim.dt_before_change(), sim.dt, sim.stable.critical);
+      progress.note(line);
+    }
     last_was_row = hist;
     if (hist) {
       next_hist += hist_dt;
@@ -579,7 +604,7 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
   auto add_dt = [&](const auto& sim) {
     report["time_step"] = stable_report(sim);
-    report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);
+    report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);  // at the starting step
   };
   if (c.dim == 2) add_dt(Simulation<2>(c, mesh));
   else add_dt(Simulation<3>(c, mesh));

@@ -388,10 +388,11 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
   }
 
   // ---- contact between bodies and fragments ----
+  stable.springs_contact = stable.springs;
   if (contact_wanted(c, mesh)) {
     contact_ = std::make_unique<ContactSystem<D>>(c, mesh, m, mass);
     mu0_ = contact_->law.mu;
-    stable.springs = std::min(stable.springs, contact_->stable_step());
+    stable.springs_contact = std::min(stable.springs, contact_->stable_step());
     // with contact, the platens act on every surface node, crack faces included: their springs
     // count with each node's largest possible area
     const std::vector<double>& amax = contact_->potential_area();
@@ -399,16 +400,26 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
       const PlatenDev& P = m.platens.p[p];
       for (int i = 0; i < nn; ++i)
         if (amax[i] > 0 && mass[i] > 0)
-          stable.springs = std::min(stable.springs, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
+          stable.springs_contact =
+              std::min(stable.springs_contact, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
     }
     sync_platen_nodes();
   }
 
   // ---- time step ----
-  stable.critical = 1.0 / std::sqrt(1.0 / (stable.bulk * stable.bulk) +
-                                    (std::isfinite(stable.springs)
-                                         ? 1.0 / (stable.springs * stable.springs)
-                                         : 0.0));
+  // Until surfaces can meet (a single body whose interfaces are all intact) the contact springs
+  // and the platens' springs on crack faces act on nothing: the step is set without them and
+  // shortened on the step on which the first surfaces can meet (apply_contact_step).
+  auto combine = [&](double springs) {
+    return 1.0 / std::sqrt(1.0 / (stable.bulk * stable.bulk) +
+                           (std::isfinite(springs) ? 1.0 / (springs * springs) : 0.0));
+  };
+  stable.critical_contact = combine(stable.springs_contact);
+  stable.contact_pending = contact_ && !contact_->may_meet() && stable.springs_contact < stable.springs;
+  if (!stable.contact_pending) stable.springs = stable.springs_contact;
+  stable.critical = combine(stable.springs);
+  safety_ = c.safety_factor;
+  dt_cap_ = c.dt;
   dt = c.safety_factor * stable.critical;
   if (c.dt > 0 && c.dt < dt) dt = c.dt;
 
@@ -443,6 +454,7 @@ void Simulation<D>::step(bool sample) {
   if (contact_) {
     contact_->update(m, dt);
     if (contact_->surface_version() != platen_surface_version_) sync_platen_nodes();
+    if (stable.contact_pending && contact_->may_meet()) apply_contact_step();
   }
   if (sample_reactions_) {
     for (size_t b = 0; b < bc_nodes_.size(); ++b) {
@@ -500,6 +512,28 @@ void Simulation<D>::step(bool sample) {
 }
 
 template <int D>
+double Simulation<D>::contact_step(double dt_now) const {
+  // the same fraction of the critical step as before; a case's time.dt stays the limit
+  double next = dt_now * stable.critical_contact / stable.critical;
+  if (dt_cap_ > 0) next = std::max(next, std::min({dt_now, dt_cap_, safety_ * stable.critical_contact}));
+  return std::min(next, dt_now);
+}
+
+template <int D>
+void Simulation<D>::apply_contact_step() {
+  // Leap-frog with a step change at x(n): v(n+1/2) = v(n-1/2) + (dt_old + dt_new) / 2 a(n),
+  // x(n+1) = x(n) + dt_new v(n+1/2). The contact forces of this step are already in m.f.
+  const double next = contact_step(dt);
+  dt_before_change_ = dt;
+  dt_changed_at_ = step_count;
+  dtv_next_ = 0.5 * (dt + next);
+  dt = next;
+  stable.springs = stable.springs_contact;
+  stable.critical = stable.critical_contact;
+  stable.contact_pending = false;
+}
+
+template <int D>
 void Simulation<D>::sync_platen_nodes() {
   platen_surface_version_ = contact_->surface_version();
   if (m.platens.count == 0) return;
@@ -545,6 +579,8 @@ template <int D>
 NodeSums Simulation<D>::update_nodes_now(bool sample) {
   prm_.t = t;
   prm_.dt = dt;
+  prm_.dtv = dtv_next_ > 0 ? dtv_next_ : dt;
+  dtv_next_ = 0;
   const bool damp = !skips.damping || prm_.alpha != 0.0 || prm_.cmass != 0.0;
   if (sample) return damp ? update_nodes<D, true, true>(m, prm_) : update_nodes<D, true, false>(m, prm_);
   return damp ? update_nodes<D, false, true>(m, prm_) : update_nodes<D, false, false>(m, prm_);
@@ -742,6 +778,9 @@ template <int D>
 void Simulation<D>::save_state(StateArrays& s) const {
   s.put("simulation/time", t);
   s.put("simulation/dt", dt);
+  s.put_int("simulation/contact_step_pending", stable.contact_pending);
+  s.put_int("simulation/dt_changed_at", dt_changed_at_);
+  s.put("simulation/dt_before_change", dt_before_change_);
   s.put_int("simulation/step", step_count);
   s.put("simulation/work_damping", work_damping_);
   s.put("simulation/work_bc", work_bc_);
@@ -767,9 +806,26 @@ void Simulation<D>::save_state(StateArrays& s) const {
 template <int D>
 void Simulation<D>::load_state(const StateArrays& s) {
   const double saved_dt = s.get("simulation/dt");
-  if (saved_dt != dt)
+  // The step of this case at the checkpoint: before or after contact's stable step applied
+  // (checkpoints written before that was lazy have no flag: the contact step from the start).
+  const bool pending = s.has("simulation/contact_step_pending") && s.get_int("simulation/contact_step_pending") != 0;
+  if (stable.contact_pending && !pending) {
+    const double after = contact_step(dt);
+    if (saved_dt != after)
+      throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
+                       " s differs from this case's " + std::to_string(after) + " s (contact on)");
+    dt = after;
+    stable.springs = stable.springs_contact;
+    stable.critical = stable.critical_contact;
+    stable.contact_pending = false;
+  } else if (saved_dt != dt || pending != stable.contact_pending) {
     throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
                      " s differs from this case's " + std::to_string(dt) + " s");
+  }
+  if (s.has("simulation/dt_changed_at")) {
+    dt_changed_at_ = static_cast<long>(s.get_int("simulation/dt_changed_at"));
+    dt_before_change_ = s.get("simulation/dt_before_change");
+  }
   t = s.get("simulation/time");
   step_count = static_cast<long>(s.get_int("simulation/step"));
   work_damping_ = s.get("simulation/work_damping");

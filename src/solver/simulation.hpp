@@ -35,9 +35,15 @@ Energies energies_from_vector(const std::vector<double>& v);
 
 struct StableStep {
   double bulk = 0;       // min over elements of altitude / P-wave speed
-  double springs = 0;    // min over interface pairs and platen springs of 2 / omega
-  double critical = 0;   // combined estimate (1/bulk^2 + 1/springs^2)^(-1/2)
+  double springs = 0;    // min over interface pairs and platen springs of 2 / omega (in force now)
+  double critical = 0;   // combined estimate (1/bulk^2 + 1/springs^2)^(-1/2) (in force now)
   int bulk_element = -1;
+  // With contact: the springs' and the combined estimate once surfaces can meet (contact springs
+  // and the platens on crack faces counted). They apply from the step on which the first surfaces
+  // can meet (a second body from the start, or the first failed interface): until then the step
+  // is not shortened by springs that do not act (contact_pending).
+  double springs_contact = 0, critical_contact = 0;
+  bool contact_pending = false;
 };
 
 template <int D>
@@ -47,7 +53,7 @@ class Simulation {
   Simulation(const Case& c, const HostMesh& mesh);
 
   Model<D> m;
-  double t = 0, dt = 0;
+  double t = 0, dt = 0;  // time; step from the present positions to the next
   long step_count = 0;
   StableStep stable;
 
@@ -57,6 +63,22 @@ class Simulation {
   // The node update of step(): advances x and v from the forces in m.f and zeroes m.f (public for
   // the benchmarks; step() calls it).
   NodeSums update_nodes_now(bool sample);
+  // The velocity step of the last node update: (dt before + dt after) / 2 on the step where dt
+  // changed, dt otherwise (the momentum change of a node over a step is its force times this).
+  double last_velocity_step() const { return prm_.dtv; }
+  // Step on which the time step last changed (contact's stable step applied), -1 if never; the
+  // step before the change.
+  long dt_changed_at() const { return dt_changed_at_; }
+  // Applies contact's stable step now instead of when surfaces can meet (the benchmark's "skip
+  // off"; call it before the first step).
+  void use_contact_step_now() {
+    if (!stable.contact_pending) return;
+    dt = contact_step(dt);
+    stable.springs = stable.springs_contact;
+    stable.critical = stable.critical_contact;
+    stable.contact_pending = false;
+  }
+  double dt_before_change() const { return dt_before_change_; }
   // Work skipped because the scene does not need it (the results are the same either way; the
   // switches exist for the tests and benchmarks that show it): no damping force or damping work
   // while both damping coefficients are zero.
@@ -130,6 +152,12 @@ class Simulation {
   long platen_surface_version_ = -1;  // contact surfaces the platen node list was taken from
   bool warned_inverted_ = false;
   NodeUpdateParams prm_{};
+  double dtv_next_ = 0;  // velocity step of the next node update when dt has just changed
+  long dt_changed_at_ = -1;
+  double dt_before_change_ = 0;
+  double dt_cap_ = 0, safety_ = 1;  // the case's time.dt (0: none) and safety factor
+  double contact_step(double dt_now) const;  // dt once surfaces can meet, from the present dt
+  void apply_contact_step();
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
   double reference_ = 0;  // energy minus external work at the reference step
