@@ -20,6 +20,8 @@
 //
 // Free functions copy the Views they need into locals before each KOKKOS_LAMBDA (CUDA-safe); no
 // std containers, exceptions or virtual calls in kernels; (i, k) indexing only.
+#include <Kokkos_ScatterView.hpp>
+
 #include "model.hpp"
 
 namespace fdem {
@@ -840,10 +842,10 @@ struct ContactSums {
 // Fric = false: frictionless contact (mu = 0 and no cohesion): the shear force is zero, so the
 // shear spring is neither computed nor stored (its history stays zero; see ContactSystem::update
 // for the switch from friction to none).
-template <int D, bool Fric = true>
+template <int D, bool Fric = true, class Force>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
                                          const Kokkos::View<double* [D]>& v,
-                                         const Kokkos::View<double* [D]>& f, const Kokkos::View<double*>& pfn,
+                                         const Force& f, const Kokkos::View<double*>& pfn,
                                          const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
                                          const Kokkos::View<double* [D]>& pfs, int j, int s, int fc,
                                          const double (&xs)[D], const double (&vs)[D], double A, double limit,
@@ -929,8 +931,8 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
   }
   for (int k = 0; k < D; ++k) {
     const double Fk = Fn * n[k] + Fs[k];
-    Kokkos::atomic_add(&f(s, k), Fk);
-    for (int q = 0; q < D; ++q) Kokkos::atomic_add(&f(S.fnode(fc, q), k), -Nc[q] * Fk);
+    f(s, k) += Fk;
+    for (int q = 0; q < D; ++q) f(S.fnode(fc, q), k) += -Nc[q] * Fk;
     if constexpr (Fric) pfs(j, k) = Fs[k];
   }
   pfn(j) = Fn;
@@ -949,15 +951,19 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
 // (contact_fade), shared among coplanar faces of one piece so that they form a partition of
 // unity where they meet. Both vary continuously with the positions, so contacts begin and end
 // without jumps in the stored energy. Fric: see contact_pair.
+// The forces go into the scatter view sf (the force kernel's, not contributed yet: the same
+// copies on host backends, so that the sums do not depend on the order the threads add in and a
+// run with T threads repeats itself bit for bit; atomics on GPUs).
 template <int D, bool Fric = true>
 ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np,
                            const PairList<D>& P, const PairScratch<D>& scratch,
                            const ContactSurface<D>& surf, const ContactLaw& law, double dt,
-                           const Kokkos::View<double* [D]>& xb) {
+                           const Kokkos::View<double* [D]>& xb,
+                           const Kokkos::Experimental::ScatterView<double* [D]>& sf) {
   auto xbuild = xb;
   auto x = m.x;
   auto v = m.v;
-  auto f = m.f;
+  auto scatter = sf;
   auto pts = points;
   auto off = P.off;
   auto pface = P.face;
@@ -977,6 +983,7 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
   Kokkos::parallel_reduce(
       "fdem::contact::forces", Kokkos::RangePolicy<ExecSpace>(0, np),
       KOKKOS_LAMBDA(const int i, ContactSums& sums) {
+        auto f = scatter.access();
         const int s = pts(i);
         double xs[D], vs[D], d2 = 0, v2 = 0;
         for (int k = 0; k < D; ++k) {

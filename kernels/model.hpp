@@ -57,6 +57,10 @@ struct Model {
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
+  // Host backends, interfaces ordered by their side-A element: first interface of each chunk of
+  // kChunk elements (ceil(ne / kChunk) + 1 entries); the force kernel then does each element
+  // chunk with the interfaces whose side A lies in it. Empty: bulk and interfaces apart.
+  Kokkos::View<int*> ichunk;
   CohesiveParams coh{};
   // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
   // to contact when failed and parted (interface_parted, kernels/step.hpp), or, without contact,

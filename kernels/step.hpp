@@ -214,9 +214,12 @@ KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const d
 }
 
 // Internal forces of bulk elements and interfaces, fused in one kernel and scattered into m.f
-// (which the node update left at zero).
+// (which the node update left at zero). contribute = false: the sums stay in sf (the caller adds
+// the contact forces to it and contributes).
+// Work items: on host backends each chunk of kChunk elements with the interfaces whose side A
+// lies in it (Model::ichunk: one pass over the nodes), else bulk chunks, then interface chunks.
 template <int D>
-void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
+void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = true) {
   const int ne = m.ne, ni = m.ni;
   const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
   auto x = m.x;
@@ -233,67 +236,79 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf) {
   auto pending = m.icontact_pending;
   const bool handover = m.contact_handover;
   const double handover_slip = m.handover_slip;
+  auto ichunk = m.ichunk;
+  // fused: work item c = element chunk c and the interfaces whose side A lies in it (one pass over
+  // the nodes: side A's positions and forces are still in cache); else bulk chunks, then
+  // interface chunks
+  const bool fused = kChunk > 1 && static_cast<int>(ichunk.extent(0)) == nbc + 1;
   sf.reset();
   Kokkos::parallel_for(
-      "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc + nic), KOKKOS_LAMBDA(const int c) {
+      "fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, fused ? nbc : nbc + nic), KOKKOS_LAMBDA(const int c) {
         auto acc = sf.access();
-        if (c < nbc) {
-          const int e1 = kmin((c + 1) * kChunk, ne);
-          for (int e = c * kChunk; e < e1; ++e) {
-            double xe[D + 1][D], G[D][D], fe[D + 1][D];
-            for (int a = 0; a < D + 1; ++a)
-              for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
-            for (int b = 0; b < D; ++b)
-              for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
-            const int mt = emat(e);
-            element_forces<D>(xe, G, vol0(e), mat(mt, 0), mat(mt, 1), fe);
-            for (int a = 0; a < D + 1; ++a)
-              for (int i = 0; i < D; ++i) acc(elem(e, a), i) += fe[a][i];
+        auto bulk = [&](const int e) {
+          double xe[D + 1][D], G[D][D], fe[D + 1][D];
+          for (int a = 0; a < D + 1; ++a)
+            for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
+          for (int b = 0; b < D; ++b)
+            for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+          const int mt = emat(e);
+          element_forces<D>(xe, G, vol0(e), mat(mt, 0), mat(mt, 1), fe);
+          for (int a = 0; a < D + 1; ++a)
+            for (int i = 0; i < D; ++i) acc(elem(e, a), i) += fe[a][i];
+        };
+        auto interface = [&](const int q) {
+          if (handover && icontact(q)) return;  // failed: its faces are in contact instead
+          double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
+          CohesivePoint h[D];
+          for (int k = 0; k < D; ++k) {
+            for (int i = 0; i < D; ++i) {
+              xa[k][i] = x(iface(q, k), i);
+              xb[k][i] = x(iface(q, D + k), i);
+            }
+            h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
           }
-        } else {
-          const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
-          for (int q = i0; q < i1; ++q) {
-            if (handover && icontact(q)) continue;  // failed: its faces are in contact instead
-            double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
-            CohesivePoint h[D];
-            for (int k = 0; k < D; ++k) {
-              for (int i = 0; i < D; ++i) {
-                xa[k][i] = x(iface(q, k), i);
-                xb[k][i] = x(iface(q, D + k), i);
-              }
-              h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
-            }
-            // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
-            // without contact, come apart for good: interface_apart).
-            if (icontact(q)) continue;
-            if (interface_apart<D>(xa, xb, h)) {
-              interface_fail_all<D>(xa, xb, iarea(q), coh, h);
-              for (int k = 0; k < D; ++k) {
-                ihist(q, k, 0) = h[k].dmax;
-                ihist(q, k, 1) = h[k].dm0;
-                ihist(q, k, 2) = h[k].dmf;
-                ihist(q, k, 3) = h[k].wd;
-              }
-              if (handover) Kokkos::atomic_exchange(&pending(), 1);
-              else icontact(q) = 1;
-              continue;
-            }
-            const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
-            if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
-              Kokkos::atomic_exchange(&pending(), 1);
+          // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
+          // without contact, come apart for good: interface_apart).
+          if (icontact(q)) return;
+          if (interface_apart<D>(xa, xb, h)) {
+            interface_fail_all<D>(xa, xb, iarea(q), coh, h);
             for (int k = 0; k < D; ++k) {
               ihist(q, k, 0) = h[k].dmax;
               ihist(q, k, 1) = h[k].dm0;
               ihist(q, k, 2) = h[k].dmf;
               ihist(q, k, 3) = h[k].wd;
-              for (int i = 0; i < D; ++i) {
-                acc(iface(q, k), i) += fa[k][i];
-                acc(iface(q, D + k), i) += fb[k][i];
-              }
+            }
+            if (handover) Kokkos::atomic_exchange(&pending(), 1);
+            else icontact(q) = 1;
+            return;
+          }
+          const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+          if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
+            Kokkos::atomic_exchange(&pending(), 1);
+          for (int k = 0; k < D; ++k) {
+            ihist(q, k, 0) = h[k].dmax;
+            ihist(q, k, 1) = h[k].dm0;
+            ihist(q, k, 2) = h[k].dmf;
+            ihist(q, k, 3) = h[k].wd;
+            for (int i = 0; i < D; ++i) {
+              acc(iface(q, k), i) += fa[k][i];
+              acc(iface(q, D + k), i) += fb[k][i];
             }
           }
+        };
+        if (fused) {
+          const int e1 = kmin((c + 1) * kChunk, ne);
+          for (int e = c * kChunk; e < e1; ++e) bulk(e);
+          for (int q = ichunk(c); q < ichunk(c + 1); ++q) interface(q);
+        } else if (c < nbc) {
+          const int e1 = kmin((c + 1) * kChunk, ne);
+          for (int e = c * kChunk; e < e1; ++e) bulk(e);
+        } else {
+          const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
+          for (int q = i0; q < i1; ++q) interface(q);
         }
       });
+  if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;
   Kokkos::Experimental::contribute(f, sf);
 }

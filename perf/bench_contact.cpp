@@ -108,7 +108,7 @@ void run(int cells, int steps) {
     ContactSystem<D>* ct = sim.contact();
     if (ct) {
       t0 = Clock::now();
-      for (int s = 0; s < steps; ++s) ct->update(sim.m, sim.dt);
+      for (int s = 0; s < steps; ++s) ct->update(sim.m, sim.dt, sim.force_scatter());
       Kokkos::fence();
       contact_ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / steps;
       Kokkos::deep_copy(sim.m.f, 0.0);

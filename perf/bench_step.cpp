@@ -20,8 +20,9 @@
 //
 // Bytes moved per step: the compulsory traffic. Each array element a pass touches counts once per
 // pass (read: once, written: once, read and written: twice), gathered node data once per pass
-// (perfect reuse within the pass, which the locality ordering approaches); the bulk and interface
-// parts of the force kernel are separate passes over the nodes. The duplicated scatter (OpenMP):
+// (perfect reuse within the pass, which the locality ordering approaches); the force kernel is one
+// pass over the nodes where it does each element chunk with its interfaces (Model::ichunk, host
+// backends), else the bulk and interface parts are separate passes. The duplicated scatter (OpenMP):
 // the reset writes T copies of the force array, each pass read-modify-writes one copy's worth, the
 // contribution reads T copies and read-modify-writes the force array. Write-allocate traffic is
 // not counted (as in STREAM), so the achieved bandwidth is a lower bound. Triad: a = b + 3 c over
@@ -356,6 +357,8 @@ double model_bytes(const Model<D>& m) {
 struct Counts {
   double nn = 0, ne = 0, ni = 0;
   double nn_elem = 0, nn_iface = 0;  // distinct nodes of the elements, of the interfaces
+  double nn_iface_only = 0;          // nodes of interfaces that no element has
+  bool fused = false;                // one force pass: elements with their interfaces (Model::ichunk)
   double T = 1;                      // scatter copies (duplicated scatter: one per thread)
   bool dup = false;                  // duplicated scatter (reset and contribute passes)
   bool handover = false, fext = false;
@@ -373,7 +376,9 @@ Counts counts(const HostMesh& mesh, const Simulation<D>& sim) {
   for (size_t i = 0; i < a.size(); ++i) {
     c.nn_elem += a[i];
     c.nn_iface += b[i];
+    c.nn_iface_only += b[i] && !a[i];
   }
+  c.fused = sim.m.ichunk.extent(0) > 0;
   c.dup = scatter_duplicated();
   c.T = c.dup ? threads() : 1;
   c.handover = sim.m.icontact.extent(0) > 0;
@@ -391,7 +396,8 @@ Traffic traffic(const Counts& c, int D) {
   const double vec = 8.0 * D;  // one node vector
   Traffic t;
   t.bulk = c.ne * ((D + 1) * 4.0 + D * D * 8.0 + 8.0 + 4.0) + c.nn_elem * vec * (1 + 2);
-  t.iface = c.ni * (2 * D * 4.0 + D * 4 * 8.0 * 2 + 8.0 + (c.handover ? 4.0 : 0.0)) + c.nn_iface * vec * (1 + 2);
+  t.iface = c.ni * (2 * D * 4.0 + D * 4 * 8.0 * 2 + 8.0 + (c.handover ? 4.0 : 0.0)) +
+            (c.fused ? c.nn_iface_only : c.nn_iface) * vec * (1 + 2);
   if (c.dup) {
     t.reset = c.T * c.nn * vec;
     t.contribute = c.T * c.nn * vec + 2 * c.nn * vec;
@@ -446,7 +452,7 @@ json run_size(double target, const Options& o, double triad_gbps) {
     fns.push_back([&]() { interface_state<D>(m); });
     if (ct) {
       names.push_back("contact");
-      fns.push_back([&]() { ct->update(m, sim.dt); });
+      fns.push_back([&]() { ct->update(m, sim.dt, sim.force_scatter()); });
     }
   }
   // The force kernel and the contribution timed on their own add to m.f: zeroed after them (not
@@ -649,11 +655,11 @@ json run_skips(double target, const Options& o) {
     // fully fragmented block thousands of times (min-time x reps) let it blow up (the corner
     // contacts of issue 4), after which the grid held every node in a few cells and one build
     // took minutes and 15 GB.
-    vs.push_back({"friction", "contact update, friction 0", "skip", [a]() { a->contact()->update(a->m, a->dt); }, a->dt});
+    vs.push_back({"friction", "contact update, friction 0", "skip", [a]() { a->contact()->update(a->m, a->dt, a->force_scatter()); }, a->dt});
     vs.push_back({"friction", "contact update, friction 0, skip off", "no skip (forced)",
-                  [b]() { b->contact()->update(b->m, b->dt); }, b->dt});
+                  [b]() { b->contact()->update(b->m, b->dt, b->force_scatter()); }, b->dt});
     vs.push_back({"friction", "contact update, friction 0.5", "not applicable",
-                  [c]() { c->contact()->update(c->m, c->dt); }, c->dt});
+                  [c]() { c->contact()->update(c->m, c->dt, c->force_scatter()); }, c->dt});
   }
   std::vector<std::function<void()>> fns;
   for (const auto& v : vs) fns.push_back(v.fn);

@@ -141,8 +141,9 @@ class Report:
         self.w()
         self.w("Bytes per step (the counting rule): the compulsory traffic: every array element a pass "
                "touches counts once (read once, written once, read and written twice), gathered node data "
-               "once per pass; the bulk and the interface parts of the force kernel are two passes over the "
-               "nodes; the duplicated scatter writes T copies of the force array (reset), read-modify-writes "
+               "once per pass; the force kernel is one pass over the nodes on host backends (each chunk of "
+               "256 elements with the interfaces whose side A lies in it, so side A's node data is read and "
+               "its forces added while in cache; `Model::ichunk`), two (bulk, then interfaces) on GPUs; the duplicated scatter writes T copies of the force array (reset), read-modify-writes "
                "one copy's worth per pass, and reads T copies plus read-modify-writes the force array "
                "(contribute). Write-allocate is not counted (as in STREAM): the bandwidths are lower bounds.")
         self.w()
@@ -571,6 +572,23 @@ class Report:
                    "; ".join(f"d = {1000 * r['element_size_m']:g} mm at {r['rate_m_per_s']:g} m/s "
                              f"({100 * r['error']:+.2f} %, {r['wall_seconds']:.0f} s)" for r in front) + ".")
             self.w()
+        dflt = [r for r in runs if abs(r["element_size_m"] - CASE_DEFAULT["element_size_m"]) < 2e-5 and
+                abs(r["rate_m_per_s"] - CASE_DEFAULT["rate_m_per_s"]) < 1e-9]
+        head = (f"Case default (`cases/brazilian_disc/case.json`: d = {1000 * CASE_DEFAULT['element_size_m']:.3g} mm, "
+                f"rate {CASE_DEFAULT['rate_m_per_s']:g} m/s)")
+        if not dflt:
+            self.w(head + ": not in this sweep.")
+        else:
+            r = dflt[0]
+            better = [o for o in runs if o is not r and o["_abs"] <= r["_abs"] and o["wall_seconds"] <= r["wall_seconds"]]
+            if r in front:
+                self.w(head + f": on the front ({100 * r['error']:+.2f} %, {r['wall_seconds']:.0f} s).")
+            else:
+                b = min(better, key=lambda o: o["wall_seconds"])
+                self.w(head + f": {100 * r['error']:+.2f} % in {r['wall_seconds']:.0f} s, not on the front: "
+                       f"d = {1000 * b['element_size_m']:g} mm at {b['rate_m_per_s']:g} m/s gives "
+                       f"{100 * b['error']:+.2f} % in {b['wall_seconds']:.0f} s.")
+        self.w()
         fig, ax = plt.subplots(figsize=(8, 5.2))
         rates = sorted({r["rate_m_per_s"] for r in runs}, reverse=True)
         markers = "osD^v<>p"

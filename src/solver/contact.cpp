@@ -452,10 +452,15 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   auto narea = surf_.narea;
   auto fshare = surf_.fshare;
   Kokkos::deep_copy(narea, 0.0);
+  // (per node over its faces in a fixed order: the same sums whatever the threads)
+  auto nfoff = surf_.nfoff;
+  auto nface = surf_.nface;
   Kokkos::parallel_for(
-      "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, na_), KOKKOS_LAMBDA(const int i) {
-        const int fa = afaces(i);
-        for (int a = 0; a < D; ++a) Kokkos::atomic_add(&narea(fnode(fa, a)), 0.5 * fshare(fa));
+      "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, nn_), KOKKOS_LAMBDA(const int i) {
+        double a = 0.0;
+        for (int j = nfoff(i); j < nfoff(i + 1); ++j)
+          if (factive(nface(j))) a += 0.5 * fshare(nface(j));
+        narea(i) = a;
       });
   auto slaves = slaves_;
   int ns = 0;
@@ -571,6 +576,18 @@ void ContactSystem<D>::build(const Model<D>& m) {
 
 template <int D>
 void ContactSystem<D>::update(const Model<D>& m, double dt) {
+  if (own_scatter_size_ != m.f.extent(0)) {
+    own_scatter_ = Scatter(m.f);
+    own_scatter_size_ = m.f.extent(0);
+  }
+  own_scatter_.reset();
+  update(m, dt, own_scatter_);
+  auto f = m.f;
+  Kokkos::Experimental::contribute(f, own_scatter_);
+}
+
+template <int D>
+void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   if (ni_ > 0 && ++since_check_ >= check_every_) {
     since_check_ = 0;
     int pending = 0;
@@ -590,8 +607,8 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
   const bool fric = law.mu != 0.0 || law.coh != 0.0;
   const bool full = !skip_frictionless || fric || friction_before_;
   friction_before_ = fric || !skip_frictionless;
-  const ContactSums r = full ? contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_)
-                             : contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_);
+  const ContactSums r = full ? contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf)
+                             : contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf);
   dissipated_ += r.dissipated;
   active_ = static_cast<int>(r.active);
   // Verlet test for the next step: the lists stay valid while no surface node has moved more than

@@ -38,7 +38,11 @@ class ContactSystem {
   ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m, const std::vector<double>& mass);
 
   // One step at positions m.x and velocities m.v (v(n-1/2)): hands failed interfaces over,
-  // rebuilds the candidate lists when needed, adds the contact forces to m.f.
+  // rebuilds the candidate lists when needed, adds the contact forces to sf (the force kernel's
+  // scatter view before its contribute: Simulation::step), or, without sf, to m.f (through a
+  // scatter view of its own: tests).
+  using Scatter = Kokkos::Experimental::ScatterView<double* [D]>;
+  void update(const Model<D>& m, double dt, Scatter& sf);
   void update(const Model<D>& m, double dt);
   // Hands every failed interface over now (update() does it when the force kernel flags one).
   void check_failures(const Model<D>& m);
@@ -111,6 +115,8 @@ class ContactSystem {
   int active_ = 0;
   long builds_ = 0, handed_ = 0, surface_version_ = 0;
   std::vector<double> potential_area_;
+  Scatter own_scatter_;  // update() without a scatter view
+  size_t own_scatter_size_ = 0;
   double dissipated_ = 0;
 };
 

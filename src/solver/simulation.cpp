@@ -212,6 +212,21 @@ Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
     }
     Kokkos::deep_copy(m.iface, if_h);
     Kokkos::deep_copy(m.iarea, ia_h);
+    // fused force pass (host backends): interfaces in order of their side-A element
+    bool ordered = kChunk > 1 && mesh.iface_elems.size() == 2 * static_cast<size_t>(ni);
+    for (int q = 1; ordered && q < ni; ++q) ordered = mesh.iface_elems[2 * q] >= mesh.iface_elems[2 * (q - 1)];
+    if (ordered) {
+      const int nbc = (ne + kChunk - 1) / kChunk;
+      m.ichunk = Kokkos::View<int*>("fdem::ichunk", nbc + 1);
+      auto ic_h = mirror(m.ichunk);
+      int q = 0;
+      for (int c = 0; c <= nbc; ++c) {
+        const long e0 = std::min(static_cast<long>(c) * kChunk, static_cast<long>(ne));
+        while (q < ni && mesh.iface_elems[2 * static_cast<size_t>(q)] < e0) ++q;
+        ic_h(c) = c == nbc ? ni : q;
+      }
+      Kokkos::deep_copy(m.ichunk, ic_h);
+    }
   }
 
   // ---- outer boundary (platen contact) ----
@@ -445,14 +460,15 @@ void Simulation<D>::set_strength_reduction(double factor) {
 template <int D>
 void Simulation<D>::step(bool sample) {
   sample = sample || !have_reference_;
-  compute_forces<D>(m, scatter_);
+  compute_forces<D>(m, scatter_, /*contribute=*/!contact_);
   if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
     m.coh.rescale = 1.0;
     srf_hist_ = srf_;
   }
   apply_platens<D>(m, t, dt);
   if (contact_) {
-    contact_->update(m, dt);
+    contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
+    Kokkos::Experimental::contribute(m.f, scatter_);
     if (contact_->surface_version() != platen_surface_version_) sync_platen_nodes();
     if (stable.contact_pending && contact_->may_meet()) apply_contact_step();
   }

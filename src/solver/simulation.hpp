@@ -112,6 +112,8 @@ class Simulation {
 
   // Contact between bodies and fragments (null when the case has it off; see solver/contact.hpp).
   ContactSystem<D>* contact() { return contact_.get(); }
+  // The force kernel's scatter view (benchmarks: contact updates timed on their own add into it).
+  ForceScatter<D>& force_scatter() { return scatter_; }
   // With contact: the platens act on the contact system's surface nodes with their areas
   // (called when the surfaces change; public only because CUDA lambdas may not sit in private
   // member functions).
