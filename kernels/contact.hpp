@@ -220,6 +220,9 @@ struct SearchSet {
   Kokkos::View<int*> faces;
   int nf = 0;
   double radius = 0;
+  // >= 0: also the distance test of face_within (tol: the contact's edge fade, ContactLaw::tol);
+  // < 0: the box test only
+  double tol = -1;
 };
 
 // Topological exclusions of (node, face) pairs, applied while the candidate lists are built.
@@ -291,6 +294,71 @@ KOKKOS_INLINE_FUNCTION void face_box(const Kokkos::View<double* [D]>& x, const K
     c[k] = 0.5 * (lo[k] + hi[k]);
     e[k] = 0.5 * (hi[k] - lo[k]);
   }
+}
+
+// Whether point p is within radius + 2 tol (L + radius) of face f (the triangle or segment, not
+// its plane; L: its longest edge). A node that comes into contact with the face before the
+// candidate lists are rebuilt (each surface node moves less than half the skin, radius = dpen +
+// skin) is within that distance now: in contact it is within dpen of the face's plane with its
+// barycentric coordinates above -tol (contact_fade), i.e. within dpen + 2 tol L' of the face, and
+// the distance changes by at most the skin while the nodes move. Degenerate faces pass.
+template <int D>
+KOKKOS_INLINE_FUNCTION bool face_within(const Kokkos::View<double* [D]>& x, const Kokkos::View<int* [D]>& fnode,
+                                        int f, const double (&p)[D], double radius, double tol) {
+  double a[D], ab[D], ap[D], L2 = 0, d2 = 0;
+  for (int k = 0; k < D; ++k) {
+    a[k] = x(fnode(f, 0), k);
+    ab[k] = x(fnode(f, 1), k) - a[k];
+    ap[k] = p[k] - a[k];
+    L2 += ab[k] * ab[k];
+  }
+  if constexpr (D == 2) {
+    double t = (ap[0] * ab[0] + ap[1] * ab[1]) / L2;
+    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    for (int k = 0; k < D; ++k) d2 += (ap[k] - t * ab[k]) * (ap[k] - t * ab[k]);
+  } else {
+    // closest point of a triangle (Ericson, Real-Time Collision Detection, 5.1.5)
+    double ac[D], bc2 = 0, ac2 = 0;
+    for (int k = 0; k < D; ++k) {
+      ac[k] = x(fnode(f, 2), k) - a[k];
+      ac2 += ac[k] * ac[k];
+      const double bc = ac[k] - ab[k];
+      bc2 += bc * bc;
+    }
+    L2 = L2 > ac2 ? L2 : ac2;
+    L2 = L2 > bc2 ? L2 : bc2;
+    auto dot = [](const double (&u)[D], const double (&v)[D]) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+    double bp[D], cp[D];
+    for (int k = 0; k < D; ++k) {
+      bp[k] = ap[k] - ab[k];
+      cp[k] = ap[k] - ac[k];
+    }
+    const double d1 = dot(ab, ap), d2a = dot(ac, ap), d3 = dot(ab, bp), d4 = dot(ac, bp), d5 = dot(ab, cp),
+                 d6 = dot(ac, cp);
+    const double vc = d1 * d4 - d3 * d2a, vb = d5 * d2a - d1 * d6, va = d3 * d6 - d5 * d4;
+    double u = 0, v = 0;  // closest point a + u ab + v ac
+    if (d1 <= 0.0 && d2a <= 0.0) {
+    } else if (d3 >= 0.0 && d4 <= d3) {
+      u = 1.0;
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+      u = d1 / (d1 - d3);
+    } else if (d6 >= 0.0 && d5 <= d6) {
+      v = 1.0;
+    } else if (vb <= 0.0 && d2a >= 0.0 && d6 <= 0.0) {
+      v = d2a / (d2a - d6);
+    } else if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0) {
+      const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+      u = 1.0 - w;
+      v = w;
+    } else {
+      const double den = 1.0 / (va + vb + vc);
+      u = vb * den;
+      v = vc * den;
+    }
+    for (int k = 0; k < D; ++k) d2 += (ap[k] - u * ab[k] - v * ac[k]) * (ap[k] - u * ab[k] - v * ac[k]);
+  }
+  const double r = radius + 2.0 * tol * (kmath::sqrt(L2) + radius);
+  return !(d2 > r * r);  // NaN (a degenerate face): in
 }
 
 // Bounding box of the face centres and the largest face half extent.
@@ -426,7 +494,7 @@ KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<in
                                       const Kokkos::View<int*>& cfaces, const Kokkos::View<double* [D]>& x,
                                       const Kokkos::View<int* [D]>& fnode, const PairFilter<D>& F,
                                       double radius, int s, const double (&p)[D],
-                                      const Kokkos::View<int*>& out, int base) {
+                                      const Kokkos::View<int*>& out, int base, double tol = -1) {
   int ijk[D];
   grid_cell<D>(g, p, ijk);
   int lo[D], span[D], ncells = 1;
@@ -456,6 +524,7 @@ KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<in
         near = near && (d < 0 ? -d : d) <= fe[k] + radius;
       }
       if (!near || pair_excluded<D>(F, fnode, s, f)) continue;
+      if (tol >= 0.0 && !face_within<D>(x, fnode, f, p, radius, tol)) continue;
       if (write) out(base + cnt) = f;
       ++cnt;
     }
@@ -474,7 +543,7 @@ int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
   auto x = S.x;
   auto fnode = S.fnode;
   auto points = S.points;
-  const double radius = S.radius;
+  const double radius = S.radius, tol = S.tol;
   const PairFilter<D> Fc = F;
   auto o = off;
   const Kokkos::View<int*> none;
@@ -486,7 +555,7 @@ int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         const int s = points(i);
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = x(s, k);
-        o(s) = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, none, 0);
+        o(s) = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, none, 0, tol);
       });
   int total = 0;
   Kokkos::parallel_scan(
@@ -522,7 +591,7 @@ void candidates_fill(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
   auto x = S.x;
   auto fnode = S.fnode;
   auto points = S.points;
-  const double radius = S.radius;
+  const double radius = S.radius, tol = S.tol;
   const PairFilter<D> Fc = F;
   auto o = off;
   auto pf = face;
@@ -532,7 +601,7 @@ void candidates_fill(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = x(s, k);
         const int b = o(s);
-        const int cnt = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, pf, b);
+        const int cnt = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, pf, b, tol);
         for (int a = b + 1; a < b + cnt; ++a) {  // insertion sort: segments are short
           const int val = pf(a);
           int c = a - 1;

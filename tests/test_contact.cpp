@@ -215,7 +215,7 @@ struct BroadResult {
 // np random points and nf random faces (size 0.002 .. 0.03) in the unit box; clustered: around
 // five centres (spread 0.03), with 1 % of the faces and points far away (up to 50 units).
 template <int D>
-BroadResult broad_phase_run(bool clustered, unsigned seed, int np, int nf, double r) {
+BroadResult broad_phase_run(bool clustered, unsigned seed, int np, int nf, double r, double tol = -1) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::normal_distribution<double> G(0.0, 0.03);
@@ -270,6 +270,7 @@ BroadResult broad_phase_run(bool clustered, unsigned seed, int np, int nf, doubl
   S.faces = faces;
   S.nf = nf;
   S.radius = r;
+  S.tol = tol;
   PairFilter<D> F;  // geometry only
   CellGrid<D> g;
   const long cap = 4L * nf;
@@ -325,6 +326,20 @@ void broad_phase_test() {
     EXPECT_GT(r.within, 100) << "the sets must be dense enough to have pairs within the distance";
     // the candidates are exactly the point / grown-box pairs (nothing lost in the grid)
     EXPECT_EQ(r.candidates, r.aabb);
+    // with the distance test (face_within, tol = 0: no edge margin): exactly the pairs within
+    // the distance (to round-off), fewer than the boxes give
+    const BroadResult t = broad_phase_run<D>(clustered, clustered ? 11u : 7u, 1500, 1500, radius, 0.0);
+    std::printf("%dD %s, distance test: %ld candidates (box test: %ld)\n", D, clustered ? "clustered" : "uniform",
+                t.candidates, t.aabb);
+    EXPECT_EQ(t.missed, 0);
+    EXPECT_EQ(t.within, r.within);
+    EXPECT_LE(t.candidates, t.within + t.within / 1000);
+    EXPECT_LT(t.candidates, t.aabb);
+    // with the contact's edge margin (tol = 0.01): nothing missed, between the two
+    const BroadResult m = broad_phase_run<D>(clustered, clustered ? 11u : 7u, 1500, 1500, radius, 0.01);
+    EXPECT_EQ(m.missed, 0);
+    EXPECT_GE(m.candidates, t.candidates);
+    EXPECT_LE(m.candidates, m.aabb);
   }
 }
 

@@ -528,6 +528,7 @@ void ContactSystem<D>::build(const Model<D>& m) {
   S.faces = afaces_;
   S.nf = na_;
   S.radius = radius;
+  S.tol = law.tol;  // the distance test of face_within
   const ContactBox<D> box = search_bounds<D>(S);
   bool finite = std::isfinite(box.ext);
   for (int k = 0; k < D; ++k) finite = finite && std::isfinite(box.lo[k]) && std::isfinite(box.hi[k]);
