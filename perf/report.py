@@ -25,7 +25,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 GROWTH_LIMIT = 1.3
 BANDWIDTH_TARGET = 0.30
-CASE_DEFAULT = {"element_size_m": 0.05 / 30, "rate_m_per_s": 0.05}  # cases/brazilian_disc/case.json
+CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.05}  # cases/brazilian_disc/case.json
 
 
 def load(path):

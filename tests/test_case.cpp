@@ -98,7 +98,7 @@ TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
   EXPECT_EQ(c.dim, 2);
   EXPECT_EQ(c.mesh.kind, "disc");
   EXPECT_DOUBLE_EQ(c.mesh.radius, 0.05);
-  EXPECT_NEAR(c.mesh.element_size, 0.05 / 30, 1e-15);
+  EXPECT_DOUBLE_EQ(c.mesh.element_size, 0.003);
   EXPECT_DOUBLE_EQ(c.mesh.origin[0], 0.0);
   EXPECT_DOUBLE_EQ(c.mesh.origin[1], 0.0);
   EXPECT_EQ(c.mesh.region, "body");
