@@ -120,14 +120,21 @@ TEST(Skips, ZeroDampingGivesTheSameResults3D) {
 
 // ---- no contact search while nothing can meet ----
 
+// The block of these scenes: one intact body with interfaces (contact "auto": on).
+template <int D>
+Case block_case() {
+  auto c = fdem_test::basic_case(D, 30e9, 0.2, 2500);
+  c.interface_materials = {fdem_test::strong_interface(30e9 / (0.1 * 0.01), 30e9 / (0.25 * 0.01))};
+  c.fracture_material = 0;
+  return c;
+}
+
 // One intact body with interfaces: contact on (the case's "auto") does nothing until an interface
 // fails, so the run is the one without contact.
 template <int D>
 void contact_idle_scene() {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 4 : 2);
-  auto c = fdem_test::basic_case(D, 30e9, 0.2, 2500);
-  c.interface_materials = {fdem_test::strong_interface(30e9 / (0.1 * 0.01), 30e9 / (0.25 * 0.01))};
-  c.fracture_material = 0;
+  auto c = block_case<D>();
   c.local_damping = 0.1;
   // the same time step for both: contact's springs do not shorten it while nothing can meet
   auto c_off = c;
@@ -164,9 +171,7 @@ void fail_all_interfaces(Simulation<D>& sim);
 template <int D>
 void contact_step_scene() {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 4 : 2);
-  auto c = fdem_test::basic_case(D, 30e9, 0.2, 2500);
-  c.interface_materials = {fdem_test::strong_interface(30e9 / (0.1 * 0.01), 30e9 / (0.25 * 0.01))};
-  c.fracture_material = 0;
+  const auto c = block_case<D>();
   auto c_off = c;
   c_off.contact.enabled = 0;
   Simulation<D> sim(c, mesh), off(c_off, mesh);
