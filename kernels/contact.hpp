@@ -20,8 +20,6 @@
 //
 // Free functions copy the Views they need into locals before each KOKKOS_LAMBDA (CUDA-safe); no
 // std containers, exceptions or virtual calls in kernels; (i, k) indexing only.
-#include <Kokkos_ScatterView.hpp>
-
 #include "model.hpp"
 
 namespace fdem {
@@ -1028,7 +1026,7 @@ ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, 
                            const PairList<D>& P, const PairScratch<D>& scratch,
                            const ContactSurface<D>& surf, const ContactLaw& law, double dt,
                            const Kokkos::View<double* [D]>& xb,
-                           const Kokkos::Experimental::ScatterView<double* [D]>& sf) {
+                           const ForceScatter<D>& sf) {
   auto xbuild = xb;
   auto x = m.x;
   auto v = m.v;

@@ -44,6 +44,8 @@ struct SumN {
 // Scatter of nodal forces: ScatterView duplicates per thread on host backends and uses atomics
 // on GPUs (Kokkos' per-backend defaults); `access()` is taken once per chunk of kScatterChunk items.
 constexpr int kScatterChunk = 256;
+template <int D>
+using ForceScatter = Kokkos::Experimental::ScatterView<double* [D]>;
 
 }  // namespace fdem
 

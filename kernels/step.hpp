@@ -8,9 +8,6 @@
 
 namespace fdem {
 
-template <int D>
-using ForceScatter = Kokkos::Experimental::ScatterView<double* [D]>;
-
 // Chunk of items per work item for the scatter: 256 on host backends (one access() per chunk),
 // 1 on GPUs (one thread per item, atomics).
 constexpr int kChunk =

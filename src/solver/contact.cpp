@@ -451,7 +451,6 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   // contact area of each node: half its share of its active faces
   auto narea = surf_.narea;
   auto fshare = surf_.fshare;
-  Kokkos::deep_copy(narea, 0.0);
   // (per node over its faces in a fixed order: the same sums whatever the threads)
   auto nfoff = surf_.nfoff;
   auto nface = surf_.nface;

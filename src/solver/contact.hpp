@@ -41,7 +41,7 @@ class ContactSystem {
   // rebuilds the candidate lists when needed, adds the contact forces to sf (the force kernel's
   // scatter view before its contribute: Simulation::step), or, without sf, to m.f (through a
   // scatter view of its own: tests).
-  using Scatter = Kokkos::Experimental::ScatterView<double* [D]>;
+  using Scatter = ForceScatter<D>;
   void update(const Model<D>& m, double dt, Scatter& sf);
   void update(const Model<D>& m, double dt);
   // Hands every failed interface over now (update() does it when the force kernel flags one).

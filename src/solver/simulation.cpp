@@ -536,17 +536,21 @@ double Simulation<D>::contact_step(double dt_now) const {
 }
 
 template <int D>
-void Simulation<D>::apply_contact_step() {
-  // Leap-frog with a step change at x(n): v(n+1/2) = v(n-1/2) + (dt_old + dt_new) / 2 a(n),
-  // x(n+1) = x(n) + dt_new v(n+1/2). The contact forces of this step are already in m.f.
-  const double next = contact_step(dt);
-  dt_before_change_ = dt;
-  dt_changed_at_ = step_count;
-  dtv_next_ = 0.5 * (dt + next);
-  dt = next;
+void Simulation<D>::take_contact_step() {
+  dt = contact_step(dt);
   stable.springs = stable.springs_contact;
   stable.critical = stable.critical_contact;
   stable.contact_pending = false;
+}
+
+template <int D>
+void Simulation<D>::apply_contact_step() {
+  // Leap-frog with a step change at x(n): v(n+1/2) = v(n-1/2) + (dt_old + dt_new) / 2 a(n),
+  // x(n+1) = x(n) + dt_new v(n+1/2). The contact forces of this step are already in m.f.
+  dt_before_change_ = dt;
+  dt_changed_at_ = step_count;
+  take_contact_step();
+  dtv_next_ = 0.5 * (dt_before_change_ + dt);
 }
 
 template <int D>
@@ -826,14 +830,10 @@ void Simulation<D>::load_state(const StateArrays& s) {
   // (checkpoints written before that was lazy have no flag: the contact step from the start).
   const bool pending = s.has("simulation/contact_step_pending") && s.get_int("simulation/contact_step_pending") != 0;
   if (stable.contact_pending && !pending) {
-    const double after = contact_step(dt);
-    if (saved_dt != after)
+    take_contact_step();
+    if (saved_dt != dt)
       throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
-                       " s differs from this case's " + std::to_string(after) + " s (contact on)");
-    dt = after;
-    stable.springs = stable.springs_contact;
-    stable.critical = stable.critical_contact;
-    stable.contact_pending = false;
+                       " s differs from this case's " + std::to_string(dt) + " s (contact on)");
   } else if (saved_dt != dt || pending != stable.contact_pending) {
     throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
                      " s differs from this case's " + std::to_string(dt) + " s");

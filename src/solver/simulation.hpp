@@ -72,11 +72,7 @@ class Simulation {
   // Applies contact's stable step now instead of when surfaces can meet (the benchmark's "skip
   // off"; call it before the first step).
   void use_contact_step_now() {
-    if (!stable.contact_pending) return;
-    dt = contact_step(dt);
-    stable.springs = stable.springs_contact;
-    stable.critical = stable.critical_contact;
-    stable.contact_pending = false;
+    if (stable.contact_pending) take_contact_step();
   }
   double dt_before_change() const { return dt_before_change_; }
   // Work skipped because the scene does not need it (the results are the same either way; the
@@ -159,7 +155,8 @@ class Simulation {
   double dt_before_change_ = 0;
   double dt_cap_ = 0, safety_ = 1;  // the case's time.dt (0: none) and safety factor
   double contact_step(double dt_now) const;  // dt once surfaces can meet, from the present dt
-  void apply_contact_step();
+  void take_contact_step();   // dt and the stable-step estimates become those with contact
+  void apply_contact_step();  // the same during a run (the velocity step of the change)
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
   double reference_ = 0;  // energy minus external work at the reference step
