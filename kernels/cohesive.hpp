@@ -3,7 +3,7 @@
 // traction-separation with scalar damage, Mohr-Coulomb initiation with tension cut-off, and
 // Benzeggagh-Kenane mixed-mode linear softening. Irreversible (damage follows the largest
 // equivalent separation reached). Compression is never damaged (penalty).
-#include "fdem_kokkos.hpp"
+#include "kernels/fdem_kokkos.hpp"
 
 namespace fdem {
 

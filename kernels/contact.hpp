@@ -10,7 +10,7 @@
 // permutation with atomic_fetch_add), queried by every surface node over its 3^D neighbour cells;
 // the candidates of a node are the faces whose bounding box, grown by the search distance, holds
 // the node. Stored as CSR by node id, each node's segment sorted by face id. Rebuilt only when a
-// node has moved more than half the skin since the last build (see src/solver/contact.cpp).
+// node has moved more than half the skin since the last build (see src/solver/contact_system.cpp).
 //
 // Narrow phase (every step, one thread per surface node over its candidates): gap, normal and
 // contact point of the node against each candidate face; normal and shear penalty springs
@@ -20,7 +20,7 @@
 //
 // Free functions copy the Views they need into locals before each KOKKOS_LAMBDA (CUDA-safe); no
 // std containers, exceptions or virtual calls in kernels; (i, k) indexing only.
-#include "model.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 

@@ -3,7 +3,7 @@
 // finite-rotation elasticity by the total-Lagrangian St Venant-Kirchhoff law (METHOD.md section 3,
 // choice documented in docs/theory.md): F = dx/dX, E = (F^T F - I)/2, S = lambda tr(E) I + 2 mu E,
 // nodal forces f_a = -V0 F S grad0(N_a). A rigid rotation gives E = 0 exactly, so no stress.
-#include "fdem_kokkos.hpp"
+#include "kernels/fdem_kokkos.hpp"
 
 namespace fdem {
 

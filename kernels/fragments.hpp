@@ -23,8 +23,8 @@
 // reductions over the fragments; only a handful of numbers go to the host.
 #include <utility>
 
-#include "cohesive.hpp"
-#include "model.hpp"
+#include "kernels/cohesive.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 
@@ -46,7 +46,7 @@ KOKKOS_INLINE_FUNCTION int fragment_bin(double fraction) {
 template <int D>
 KOKKOS_INLINE_FUNCTION bool interface_failed(const Kokkos::View<double* [D][4]>& ihist, int q) {
   for (int k = 0; k < D; ++k) {
-    const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+    const CohesivePoint h = load_point(ihist, q, k);
     if (cohesive_damage(h) < 1.0) return false;
   }
   return true;

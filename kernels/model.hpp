@@ -1,10 +1,10 @@
 #pragma once
 // Device data of a run: nodes, elements and interfaces as structures of arrays in Kokkos Views,
 // specialised on the dimension D (2: triangles and 4-node interfaces; 3: tetrahedra and 6-node
-// interfaces) so that a 2D run does no 3D work. Built once on the host (src/solver/build_model.cpp);
+// interfaces) so that a 2D run does no 3D work. Built once on the host (src/solver/simulation.cpp);
 // during a run nothing moves between host and device except output.
-#include "cohesive.hpp"
-#include "fdem_kokkos.hpp"
+#include "kernels/cohesive.hpp"
+#include "kernels/fdem_kokkos.hpp"
 
 namespace fdem {
 
@@ -82,5 +82,31 @@ struct Model {
   Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, node)
   Kokkos::View<double* [kPlatenAcc]> platen_acc;
 };
+
+// The cohesive history of integration point k of interface q (layout of Model::ihist: dmax, dm0,
+// dmf, wd; cohesive.hpp). The one place that knows the layout: kernels read and write the history
+// through these.
+template <class HistView>
+KOKKOS_INLINE_FUNCTION CohesivePoint load_point(const HistView& ihist, int q, int k) {
+  return CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+}
+template <class HistView>
+KOKKOS_INLINE_FUNCTION void store_point(const HistView& ihist, int q, int k, const CohesivePoint& h) {
+  ihist(q, k, 0) = h.dmax;
+  ihist(q, k, 1) = h.dm0;
+  ihist(q, k, 2) = h.dmf;
+  ihist(q, k, 3) = h.wd;
+}
+
+// Positions of interface q's node pairs: xa[k] (side A) and xb[k] (side B), k < D.
+template <int D, class PosView, class IfaceView>
+KOKKOS_INLINE_FUNCTION void gather_interface(const PosView& x, const IfaceView& iface, int q, double (&xa)[D][D],
+                                             double (&xb)[D][D]) {
+  for (int k = 0; k < D; ++k)
+    for (int i = 0; i < D; ++i) {
+      xa[k][i] = x(iface(q, k), i);
+      xb[k][i] = x(iface(q, D + k), i);
+    }
+}
 
 }  // namespace fdem

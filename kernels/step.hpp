@@ -2,9 +2,9 @@
 // The kernels of one explicit step, and the reductions done on output/check steps only.
 // Free functions that copy the Views they need into locals before each KOKKOS_LAMBDA, so that the
 // same source compiles for OpenMP and CUDA (no virtual calls, no std containers, no exceptions).
-#include "cohesive.hpp"
-#include "elastic.hpp"
-#include "model.hpp"
+#include "kernels/cohesive.hpp"
+#include "kernels/elastic.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 
@@ -262,7 +262,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
               xa[k][i] = x(iface(q, k), i);
               xb[k][i] = x(iface(q, D + k), i);
             }
-            h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+            h[k] = load_point(ihist, q, k);
           }
           // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
           // without contact, come apart for good: interface_apart).
@@ -270,10 +270,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
           if (interface_apart<D>(xa, xb, h)) {
             interface_fail_all<D>(xa, xb, iarea(q), coh, h);
             for (int k = 0; k < D; ++k) {
-              ihist(q, k, 0) = h[k].dmax;
-              ihist(q, k, 1) = h[k].dm0;
-              ihist(q, k, 2) = h[k].dmf;
-              ihist(q, k, 3) = h[k].wd;
+              store_point(ihist, q, k, h[k]);
             }
             if (handover) Kokkos::atomic_exchange(&pending(), 1);
             else icontact(q) = 1;
@@ -283,10 +280,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
           if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
             Kokkos::atomic_exchange(&pending(), 1);
           for (int k = 0; k < D; ++k) {
-            ihist(q, k, 0) = h[k].dmax;
-            ihist(q, k, 1) = h[k].dm0;
-            ihist(q, k, 2) = h[k].dmf;
-            ihist(q, k, 3) = h[k].wd;
+            store_point(ihist, q, k, h[k]);
             for (int i = 0; i < D; ++i) {
               acc(iface(q, k), i) += fa[k][i];
               acc(iface(q, D + k), i) += fb[k][i];
@@ -544,7 +538,7 @@ SumN<4> interface_state(const Model<D>& m) {
         const bool handed = icontact(q);  // carries nothing, stores nothing
         bool any = false, all = true;
         for (int k = 0; k < D; ++k) {
-          const CohesivePoint h{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+          const CohesivePoint h = load_point(ihist, q, k);
           double d[D], dn = 0, ds2 = 0;
           for (int i = 0; i < D; ++i) {
             d[i] = xb[k][i] - xa[k][i];
@@ -655,7 +649,7 @@ void interface_damage(const Model<D>& m, const Kokkos::View<double*>& out) {
       "fdem::interface_damage", Kokkos::RangePolicy<ExecSpace>(0, m.ni), KOKKOS_LAMBDA(const int q) {
         double s = 0;
         for (int k = 0; k < D; ++k)
-          s += cohesive_damage(CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)});
+          s += cohesive_damage(load_point(ihist, q, k));
         out(q) = s / D;
       });
 }

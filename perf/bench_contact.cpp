@@ -1,4 +1,4 @@
-// Cost of contact per step against the rest of the step (src/solver/contact.hpp).
+// Cost of contact per step against the rest of the step (src/solver/contact_system.hpp).
 //
 //   bench_contact [cells2d=80] [cells3d=12] [steps=200]
 //

@@ -6,7 +6,7 @@
 
 #include <cmath>
 
-#include "cohesive.hpp"
+#include "kernels/cohesive.hpp"
 
 namespace {
 

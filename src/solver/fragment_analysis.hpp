@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "fragments.hpp"
-#include "model.hpp"
+#include "kernels/fragments.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 

@@ -460,17 +460,26 @@ void Simulation<D>::set_strength_reduction(double factor) {
 template <int D>
 void Simulation<D>::step(bool sample) {
   sample = sample || !have_reference_;
+  Kokkos::Timer clock;
+  auto lap = [&clock](double& phase) {  // the phase's kernels finish before its clock stops
+    Kokkos::fence();
+    phase += clock.seconds();
+    clock.reset();
+  };
   compute_forces<D>(m, scatter_, /*contribute=*/!contact_);
   if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
     m.coh.rescale = 1.0;
     srf_hist_ = srf_;
   }
+  lap(phase_times_.forces);
   apply_platens<D>(m, t, dt);
+  lap(phase_times_.platens);
   if (contact_) {
     contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
     Kokkos::Experimental::contribute(m.f, scatter_);
     if (contact_->surface_version() != platen_surface_version_) sync_platen_nodes();
     if (stable.contact_pending && contact_->may_meet()) apply_contact_step();
+    lap(phase_times_.contact);
   }
   if (sample_reactions_) {
     for (size_t b = 0; b < bc_nodes_.size(); ++b) {
@@ -493,7 +502,9 @@ void Simulation<D>::step(bool sample) {
     }
     e.contact_elastic = platen_energy<D>(m, t) + (contact_ ? contact_->elastic_energy() : 0.0);
   }
+  lap(phase_times_.ledger);
   const NodeSums w = update_nodes_now(sample);
+  lap(phase_times_.nodes);
   if (sample) {
     // Works done by time t: everything before this step plus half of this step's increment
     // (the increments are centred on x(n)).
@@ -525,6 +536,8 @@ void Simulation<D>::step(bool sample) {
   work_bc_ += w.v[1];
   t += dt;
   ++step_count;
+  lap(phase_times_.ledger);
+  ++phase_times_.steps;
 }
 
 template <int D>

@@ -9,9 +9,9 @@
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
-#include "model.hpp"
-#include "solver/contact.hpp"
-#include "step.hpp"
+#include "kernels/model.hpp"
+#include "solver/contact_system.hpp"
+#include "kernels/step.hpp"
 
 namespace fdem {
 
@@ -44,6 +44,18 @@ struct StableStep {
   // is not shortened by springs that do not act (contact_pending).
   double springs_contact = 0, critical_contact = 0;
   bool contact_pending = false;
+};
+
+// Wall time of each phase of step(), summed over the steps so far (s). The kernels of a phase are
+// fenced before its clock stops, so on a GPU backend the figures are the phases' own times.
+struct PhaseTimes {
+  double forces = 0;   // bulk elements and cohesive interfaces (the fused force kernel)
+  double platens = 0;  // rigid platens
+  double contact = 0;  // handover, broad phase, narrow phase, and the one contribute of the forces
+  double ledger = 0;   // energies, reactions and momentum on sampled steps
+  double nodes = 0;    // node update (damping, velocity BCs, leap-frog)
+  long steps = 0;
+  double total() const { return forces + platens + contact + ledger + nodes; }
 };
 
 template <int D>
@@ -81,6 +93,8 @@ class Simulation {
   struct Skips {
     bool damping = true;
   } skips;
+  // Wall time per phase of step() so far (run summary: seconds and share per phase).
+  const PhaseTimes& phase_times() const { return phase_times_; }
   // Energies at the last sampled step (the first step is always sampled).
   const Energies& energies() const { return energies_; }
   // Takes the state at the next step as the energy reference (after changing x or v by hand).
@@ -106,7 +120,7 @@ class Simulation {
   void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                 std::vector<double>& stress, std::vector<double>& damage);
 
-  // Contact between bodies and fragments (null when the case has it off; see solver/contact.hpp).
+  // Contact between bodies and fragments (null when the case has it off; see solver/contact_system.hpp).
   ContactSystem<D>* contact() { return contact_.get(); }
   // The force kernel's scatter view (benchmarks: contact updates timed on their own add into it).
   ForceScatter<D>& force_scatter() { return scatter_; }
@@ -163,6 +177,7 @@ class Simulation {
   bool have_reference_ = false;
   double energy_floor_ = 0;  // energies below this are round-off (strain energy at strain 1e-6)
   Energies energies_;
+  PhaseTimes phase_times_;
   std::vector<std::string> platen_names_, bc_names_;
   std::vector<Kokkos::View<int*>> bc_nodes_;
   std::vector<std::array<double, 3>> reactions_;

@@ -5,7 +5,7 @@
 #include <string>
 #include <type_traits>
 
-#include "fdem_kokkos.hpp"
+#include "kernels/fdem_kokkos.hpp"
 #include "io/checkpoint.hpp"
 
 namespace fdem {

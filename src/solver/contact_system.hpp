@@ -18,11 +18,11 @@
 #include <memory>
 #include <vector>
 
-#include "../../kernels/contact.hpp"  // the device kernels (a plain "contact.hpp" is this file)
+#include "kernels/contact.hpp"
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
-#include "model.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 

@@ -1,4 +1,4 @@
-#include "solver/contact.hpp"
+#include "solver/contact_system.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 
 #include "common/error.hpp"
 #include "solver/state_io.hpp"
-#include "step.hpp"
+#include "kernels/step.hpp"
 
 namespace fdem {
 
@@ -492,8 +492,7 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
         if (icontact(q)) return;
         bool all = true;
         for (int k = 0; k < D; ++k)
-          all = all && cohesive_damage(CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2),
-                                                     ihist(q, k, 3)}) >= 1.0;
+          all = all && cohesive_damage(load_point(ihist, q, k)) >= 1.0;
         if (!all) return;
         double xa[D][D], xb[D][D];
         for (int k = 0; k < D; ++k)
@@ -502,7 +501,7 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
             xb[k][i] = x(iface(q, D + k), i);
           }
         CohesivePoint h[D];
-        for (int k = 0; k < D; ++k) h[k] = CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};
+        for (int k = 0; k < D; ++k) h[k] = load_point(ihist, q, k);
         if (interface_parted<D>(xa, xb, slip) || interface_apart<D>(xa, xb, h)) {
           icontact(q) = 1;
           ++cnt;
