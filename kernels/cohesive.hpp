@@ -1,5 +1,5 @@
 #pragma once
-// Cohesive interface law at one integration point (METHOD.md section 4): uncoupled penalty
+// Cohesive interface law at one integration point (docs/theory.md section 4): uncoupled penalty
 // traction-separation with scalar damage, Mohr-Coulomb initiation with tension cut-off, and
 // Benzeggagh-Kenane mixed-mode linear softening. Irreversible (damage follows the largest
 // equivalent separation reached). Compression is never damaged (penalty).

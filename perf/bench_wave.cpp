@@ -10,7 +10,7 @@
 // test's alpha = 0.1), so strong that nothing breaks. The blocks of the first tenth of the bar
 // start at v0 = 0.1 m/s along it: a pulse of amplitude v0/2 runs to the right at
 // c_eff = sqrt(E_eff / rho), E_eff = E k_n d / (E + k_n d) (blocks in series with interfaces,
-// METHOD.md section 5). Its front (the first crossing of v0/4, interpolated between steps) is timed
+// docs/theory.md section 5). Its front (the first crossing of v0/4, interpolated between steps) is timed
 // at two nodes of the bottom row, at 0.4 L and 0.8 L. Errors: the arrival time at 0.8 L against
 // (0.8 L - 0.1 L) / c_eff, and the speed between the two against c_eff (what the test checks);
 // also against the continuum bar speed sqrt(E / rho). Wall time: the time loop (the set-up is

@@ -225,7 +225,7 @@ double e_eff_crossed(double E, double nu, double kn, double ks, double d) {
 }
 
 // Table 2 parameters, platen friction 0.2: the slope of the linear part is E_eff of the crossed
-// mesh within 1.5 % (measured +0.5 % here, +0.6 % at 2.5 mm cells; METHOD.md's E / (1.1 (1 -
+// mesh within 1.5 % (measured +0.5 % here, +0.6 % at 2.5 mm cells; the paper's E / (1.1 (1 -
 // nu^2)) would be 10 % stiffer), and the specimen fails in an X: in each quadrant at least five
 // failed diagonal interfaces, more than half of them along the diagonal from that quadrant's
 // corner to the centre (measured 10/10, 10/12, 8/12, 10/10; with the contact springs' two-mass

@@ -1,4 +1,4 @@
-// Verification of the cohesive law (METHOD.md section 4) at one integration point: strengths,
+// Verification of the cohesive law (docs/theory.md section 4) at one integration point: strengths,
 // fracture energies (pure modes, Benzeggagh-Kenane mixed mode), compression, unloading/reloading.
 // The work is integrated numerically from the tractions the law returns, so these tests check the
 // law's consistency, not its bookkeeping.

@@ -26,7 +26,7 @@ double xpos(const Simulation<2>& sim, int i) {
   return out;
 }
 
-// E_eff = E kn d / (E + kn d) for blocks of size d in series with interfaces (METHOD.md sec. 5).
+// E_eff = E kn d / (E + kn d) for blocks of size d in series with interfaces (docs/theory.md sec. 5).
 TEST(Solver, EffectiveModulusOfBlocksInSeriesWithInterfaces) {
   const int nb = 10;
   const double d = 0.01, h = 0.01, E = 30e9;

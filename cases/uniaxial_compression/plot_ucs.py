@@ -27,7 +27,7 @@ traction) summed over the interfaces of a cell, divided by its area:
 
 (the horizontal edge opens by sigma / k_n; each of the four half-diagonals, length d / sqrt(2),
 carries sigma / 2 normal and sigma / 2 shear), and the lateral strain over the axial one is
-E_eff (nu (1 + nu) / E + (1 / k_s - 1 / k_n) / (sqrt(2) d)). METHOD.md's E / (1.1 (1 - nu^2)) is that of blocks
+E_eff (nu (1 + nu) / E + (1 / k_s - 1 / k_n) / (sqrt(2) d)). the paper's E / (1.1 (1 - nu^2)) is that of blocks
 in series with one interface per d along the load (alpha = E / (k_n d) = 0.1).
 Uses Debian's python3-matplotlib, python3-h5py and python3-numpy.
 """

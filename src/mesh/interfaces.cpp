@@ -1,4 +1,4 @@
-// Insertion of zero-thickness cohesive interface elements (METHOD.md section 1).
+// Insertion of zero-thickness cohesive interface elements (docs/theory.md section 1).
 //
 // Rules (see also mesh.hpp):
 // - Elements keep their indices and order. Nodes are renumbered element by element in order of
