@@ -23,6 +23,7 @@
 
 #include "mesh/mesh.hpp"
 #include "solver/simulation.hpp"
+#include "tests/scenes.hpp"
 
 namespace {
 
@@ -79,20 +80,6 @@ HostMesh scene(int cells) {
 }
 
 template <int D>
-void fail_all(Simulation<D>& sim) {
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    for (int k = 0; k < D; ++k) {
-      h(q, k, 0) = 1.0;
-      h(q, k, 1) = 0.5;
-      h(q, k, 2) = 1.0;
-      h(q, k, 3) = 0.0;
-    }
-  Kokkos::deep_copy(sim.m.ihist, h);
-  sim.contact()->check_failures(sim.m);
-}
-
-template <int D>
 void run(int cells, int steps) {
   const HostMesh mesh = scene<D>(cells);
   const double h = 1.0 / cells;
@@ -100,7 +87,7 @@ void run(int cells, int steps) {
               mesh.num_ifaces());
   for (const std::string mode : {"off", "intact", "fragmented"}) {
     Simulation<D> sim(make_case(D, h, mode == "off" ? 0 : 1), mesh);
-    if (mode == "fragmented") fail_all(sim);
+    if (mode == "fragmented") fdem_test::fail_all_interfaces(sim);
     for (int s = 0; s < 50; ++s) sim.step();  // warm-up (first build, first contacts)
     Kokkos::fence();
     // interleaved: one step, then one contact update on the state it left (into the step's

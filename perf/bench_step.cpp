@@ -48,10 +48,12 @@
 
 #include "mesh/mesh.hpp"
 #include "solver/simulation.hpp"
+#include "tests/scenes.hpp"
 
 namespace {
 
 using namespace fdem;
+using fdem_test::shake;
 using Clock = std::chrono::steady_clock;
 using nlohmann::json;
 
@@ -325,19 +327,6 @@ Case make_case(int dim, double h, const SceneOptions& so) {
   return c;
 }
 
-template <int D>
-void shake(Simulation<D>& sim, double amp, unsigned seed = 12345) {
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  Kokkos::deep_copy(v, sim.m.v);
-  for (int i = 0; i < sim.m.nn; ++i)
-    for (int k = 0; k < D; ++k) {
-      seed = seed * 1664525u + 1013904223u;
-      v(i, k) += amp * ((seed >> 8) * (2.0 / 16777216.0) - 1.0);
-    }
-  Kokkos::deep_copy(sim.m.v, v);
-  sim.reset_energy_reference();
-}
-
 template <class V>
 double view_bytes(const V& v) {
   return static_cast<double>(v.span()) * sizeof(typename V::value_type);
@@ -558,21 +547,6 @@ json run_size(double target, const Options& o, double triad_gbps) {
 // ---------------------------------------------------------------------------------------------
 // skips: one scene with and without each skip
 
-template <int D>
-void fail_all(Simulation<D>& sim) {
-  auto hh = Kokkos::create_mirror_view(sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    for (int k = 0; k < D; ++k) {
-      hh(q, k, 0) = 1.0;
-      hh(q, k, 1) = 0.5;
-      hh(q, k, 2) = 1.0;
-      hh(q, k, 3) = 0.0;
-    }
-  Kokkos::deep_copy(sim.m.ihist, hh);
-  sim.contact()->check_failures(sim.m);
-  sim.reset_energy_reference();
-}
-
 struct Variant {
   std::string skip, variant, applies;  // applies: "skip", "no skip (forced)", "not applicable"
   std::function<void()> fn;
@@ -642,7 +616,7 @@ json run_skips(double target, const Options& o) {
     for (int k = 0; k < 3; ++k) {
       sims.push_back(std::make_unique<Simulation<D>>(make_case(D, h, k == 2 ? ff : fz), mesh));
       Simulation<D>& s = *sims.back();
-      fail_all(s);
+      fdem_test::fail_all_interfaces(s);
       shake(s, 1e-2);
       for (int i = 0; i < 5; ++i) s.step(i == 0);
       s3.push_back(&s);

@@ -16,11 +16,13 @@
 
 #include "common/error.hpp"
 #include "solver/simulation.hpp"
+#include "scenes.hpp"
 #include "solver_fixtures.hpp"
 
 namespace {
 
 using namespace fdem;
+using fdem_test::fail_all_interfaces;
 
 const double kPi = std::acos(-1.0);
 
@@ -62,22 +64,6 @@ struct HostState {
     return r;
   }
 };
-
-// Every interface failed: damage 1 at all points, then handed over to contact.
-template <int D>
-void fail_all_interfaces(Simulation<D>& sim) {
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    for (int k = 0; k < D; ++k) {
-      h(q, k, 0) = 1.0;  // dmax
-      h(q, k, 1) = 0.5;  // dm0
-      h(q, k, 2) = 1.0;  // dmf
-      h(q, k, 3) = 0.0;  // no fracture energy: the test starts from cracked pieces
-    }
-  Kokkos::deep_copy(sim.m.ihist, h);
-  sim.contact()->check_failures(sim.m);
-  sim.reset_energy_reference();
-}
 
 // ---- case keys ----
 

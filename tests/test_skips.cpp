@@ -8,11 +8,14 @@
 #include <string>
 
 #include "solver/simulation.hpp"
+#include "scenes.hpp"
 #include "solver_fixtures.hpp"
 
 namespace {
 
 using namespace fdem;
+using fdem_test::fail_all_interfaces;
+using fdem_test::shake;
 
 template <int D>
 HostMesh cracked_block(int n) {
@@ -20,18 +23,6 @@ HostMesh cracked_block(int n) {
                       : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
   insert_interfaces(m, {true});
   return m;
-}
-
-// Deterministic pseudo-random velocities (m/s) on every node.
-template <int D>
-void shake(Simulation<D>& sim, double amp) {
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  Kokkos::deep_copy(v, sim.m.v);
-  unsigned seed = 12345;
-  for (int i = 0; i < sim.m.nn; ++i)
-    for (int k = 0; k < D; ++k) v(i, k) += amp * fdem_test::prand(seed);
-  Kokkos::deep_copy(sim.m.v, v);
-  sim.reset_energy_reference();
 }
 
 template <int D>
@@ -160,8 +151,6 @@ void contact_idle_scene() {
 TEST(Skips, ContactWhileNothingCanMeetGivesTheSameResults2D) { contact_idle_scene<2>(); }
 TEST(Skips, ContactWhileNothingCanMeetGivesTheSameResults3D) { contact_idle_scene<3>(); }
 
-template <int D>
-void fail_all_interfaces(Simulation<D>& sim);
 
 // The step of idle contact: the springs of contacts (and of the platens on crack faces) count in
 // the stable step only from the step on which surfaces can meet. Before: the step without contact.
@@ -208,21 +197,6 @@ TEST(Skips, ContactStepAppliesOnceSurfacesCanMeet2D) { contact_step_scene<2>(); 
 TEST(Skips, ContactStepAppliesOnceSurfacesCanMeet3D) { contact_step_scene<3>(); }
 
 // ---- no friction history when friction is off ----
-
-template <int D>
-void fail_all_interfaces(Simulation<D>& sim) {
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    for (int k = 0; k < D; ++k) {
-      h(q, k, 0) = 1.0;
-      h(q, k, 1) = 0.5;
-      h(q, k, 2) = 1.0;
-      h(q, k, 3) = 0.0;
-    }
-  Kokkos::deep_copy(sim.m.ihist, h);
-  sim.contact()->check_failures(sim.m);
-  sim.reset_energy_reference();
-}
 
 // Largest difference between the node velocities of two runs, relative to the largest speed.
 template <int D>
