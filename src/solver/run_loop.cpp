@@ -1,0 +1,205 @@
+#include "solver/run_loop.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "io/output.hpp"
+#include "solver/summary.hpp"
+
+namespace fdem {
+
+namespace {
+double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
+}  // namespace
+
+template <int D>
+RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+                    const RunIdentity& id, const StateArrays* restart)
+    : c_(c),
+      mesh_(mesh),
+      out_(out),
+      opt_(opt),
+      id_(id),
+      restart_(restart),
+      wall0_(Clock::now()),
+      loop0_(wall0_),
+      sim_(c, mesh),
+      boundary_nodes_(sim_.m.nb),
+      schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
+  if (restart) sim_.load_state(*restart);
+  history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
+  if (c.output_fragments && sim_.m.ni > 0) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
+  if (restart) {
+    restore(*restart);
+  } else {
+    history_->open(out, false);
+    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, mesh, nullptr);
+  }
+  progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
+  announce();
+}
+
+// The run loop's state from the checkpoint; history.csv and snapshots.h5 cut back to it.
+template <int D>
+void RunLoop<D>::restore(const StateArrays& r) {
+  RunState s;
+  s.load(r, sim_.m.platens.count);
+  history_->restore(s, r.file);
+  schedule_.restore(s, sim_.t);
+  prior_wall_ = s.wall_seconds;
+  prior_loop_wall_ = s.loop_wall_seconds;
+  ckpt_wall_ = s.checkpoint_seconds;
+  ckpt_written_ = static_cast<long>(s.checkpoints_written);
+  history_->open(out_, true);
+  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, mesh_, &s);
+}
+
+template <int D>
+void RunLoop<D>::announce() const {
+  if (!opt_.progress) return;
+  std::fprintf(stderr,
+               "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); "
+               "%.0f steps to end_time\n",
+               c_.name.c_str(), sim_.m.nn, sim_.m.ne, sim_.m.ni, sim_.dt, sim_.dt / sim_.stable.critical,
+               sim_.stable.critical, std::ceil(c_.end_time / sim_.dt));
+  if (sim_.stable.contact_pending)
+    std::fprintf(stderr,
+                 "fdem: contact springs act once surfaces can meet (first failed interface); the critical "
+                 "step is then %.3e s\n",
+                 sim_.stable.critical_contact);
+}
+
+template <int D>
+nlohmann::json RunLoop<D>::run() {
+  if (!restart_) {
+    snaps_->take(sim_, frag_.get());
+  } else if (opt_.progress) {
+    std::fprintf(stderr,
+                 "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
+                 restart_->file.c_str(), sim_.step_count, sim_.t, history_->rows(), snaps_->frames());
+  }
+  std::string stop_reason = "end_time";
+  loop0_ = Clock::now();
+  while (sim_.t < c_.end_time * (1 - 1e-12)) {
+    if (c_.max_steps > 0 && sim_.step_count >= c_.max_steps) {
+      stop_reason = "max_steps";
+      break;
+    }
+    const bool row = schedule_.history_due(sim_.t);  // sampled at the start of the step
+    step(row, row || schedule_.check_due(sim_.step_count));
+    schedule_.stepped(row);
+    if (row && history_row()) {
+      stop_reason = "load_drop";
+      break;
+    }
+    if (schedule_.take_snapshot(sim_.t)) snaps_->take(sim_, frag_.get());
+    if (schedule_.take_checkpoint(sim_.t)) save_checkpoint();
+    progress_->update(sim_.step_count, sim_.t, c_.end_time);
+  }
+  const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
+  progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
+  progress_->done();
+  if (!schedule_.last_was_row()) final_row();
+  snaps_->take(sim_, frag_.get());
+  return finish(stop_reason, loop_wall);
+}
+
+// One step; `row`: sampled for a history row (reactions too), `check`: energies sampled and the
+// stability checked after it.
+template <int D>
+void RunLoop<D>::step(bool row, bool check) {
+  sim_.set_sample_reactions(row);
+  if (history_->has_srf()) sim_.set_strength_reduction(history_->srf_at(sim_.t));
+  if (c_.damping_change_time >= 0 && sim_.t >= c_.damping_change_time * (1 - 1e-12))
+    sim_.set_damping(c_.damping_change_local, c_.damping_change_mass);
+  sim_.step(check);
+  if (check) sim_.check_stability();
+  if (sim_.dt_changed_at() == sim_.step_count - 1) {
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "fdem: step %ld, t = %.4e s: surfaces can meet, contact springs act: dt = %.3e -> %.3e s "
+                  "(critical %.3e s)",
+                  sim_.dt_changed_at(), sim_.t, sim_.dt_before_change(), sim_.dt, sim_.stable.critical);
+    progress_->note(line);
+  }
+}
+
+template <int D>
+bool RunLoop<D>::history_row() {
+  const bool stop = history_->write_row(sim_);
+  if (frag_) frag_->write_row(sim_, history_->last());
+  return stop;
+}
+
+// The run ended between rows: one more sampled step for a row at its end.
+template <int D>
+void RunLoop<D>::final_row() {
+  sim_.set_sample_reactions(true);
+  sim_.step(true);
+  sim_.check_stability();
+  history_row();
+}
+
+template <int D>
+void RunLoop<D>::save_checkpoint() {
+  const auto c0 = Clock::now();
+  StateArrays st;
+  sim_.save_state(st);
+  RunState s;
+  history_->save(s);
+  schedule_.save(s);
+  snaps_->save(s);
+  s.wall_seconds = prior_wall_ + seconds(c0 - wall0_);
+  s.loop_wall_seconds = prior_loop_wall_ + seconds(c0 - loop0_);
+  s.checkpoint_seconds = ckpt_wall_;
+  s.checkpoints_written = ckpt_written_ + 1;
+  s.save(st);
+  CheckpointHeader h;
+  h.dim = D;
+  h.nodes = sim_.m.nn;
+  h.elements = sim_.m.ne;
+  h.interfaces = sim_.m.ni;
+  h.case_hash = id_.case_hash;
+  h.mesh_hash = id_.mesh_hash;
+  h.time = sim_.t;
+  h.step = sim_.step_count;
+  write_checkpoint(out_ + "/checkpoint.h5", h, st);
+  ++ckpt_written_;
+  ckpt_wall_ += seconds(Clock::now() - c0);
+}
+
+template <int D>
+nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wall) {
+  RunRecord r;
+  r.out = out_;
+  r.boundary_nodes = boundary_nodes_;
+  r.stop_reason = stop_reason;
+  r.wall_seconds = prior_wall_ + seconds(Clock::now() - wall0_);
+  r.loop_wall_seconds = loop_wall;
+  r.snapshots = snaps_->on();
+  r.checkpoint_file = out_ + "/checkpoint.h5";
+  r.checkpoint_every = schedule_.checkpoint_every();
+  r.checkpoint_seconds = ckpt_wall_;
+  r.checkpoints_written = ckpt_written_;
+  r.restart = restart_;
+  const nlohmann::json summary = run_summary(c_, mesh_, sim_, *history_, frag_.get(), r);
+  write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
+  print_run_end(summary, r, sim_.step_count, opt_.progress);
+  return summary;
+}
+
+template <int D>
+nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+                       const RunIdentity& id, const StateArrays* restart) {
+  RunLoop<D> run(c, mesh, out, opt, id, restart);
+  return run.run();
+}
+
+template class RunLoop<2>;
+template class RunLoop<3>;
+template nlohmann::json run_dim<2>(const Case&, const HostMesh&, const std::string&, const RunOptions&,
+                                   const RunIdentity&, const StateArrays*);
+template nlohmann::json run_dim<3>(const Case&, const HostMesh&, const std::string&, const RunOptions&,
+                                   const RunIdentity&, const StateArrays*);
+
+}  // namespace fdem

@@ -1,0 +1,71 @@
+#pragma once
+// The time loop of a run (run_case in solver/run.hpp prepares the case, mesh and restart file):
+// step, the outputs that are due, the stability checks, checkpoints; then a final history row,
+// the last snapshot and summary.json.
+#include <chrono>
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "io/case.hpp"
+#include "io/checkpoint.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/history_table.hpp"
+#include "solver/run.hpp"
+#include "solver/run_output.hpp"
+#include "solver/run_progress.hpp"
+#include "solver/run_state.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+template <int D>
+class RunLoop {
+ public:
+  // restart: the checkpoint to go on from (checked against the case by the caller), or null.
+  RunLoop(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+          const RunIdentity& id, const StateArrays* restart);
+  // Runs to the end time (or the step limit, or the stop rule); returns the summary written to
+  // out/summary.json.
+  nlohmann::json run();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  void restore(const StateArrays& r);
+  void announce() const;
+  void step(bool row, bool check);
+  bool history_row();  // true when the stop rule is met
+  void final_row();
+  void save_checkpoint();
+  nlohmann::json finish(const std::string& stop_reason, double loop_wall);
+
+  const Case& c_;
+  const HostMesh& mesh_;
+  const std::string out_;
+  const RunOptions& opt_;
+  const RunIdentity id_;
+  const StateArrays* restart_;
+  const Clock::time_point wall0_;
+  Clock::time_point loop0_;
+  Simulation<D> sim_;
+  const int boundary_nodes_;  // before contact adds crack faces to the platens' nodes
+  OutputSchedule schedule_;
+  std::unique_ptr<HistoryTable<D>> history_;
+  std::unique_ptr<RunFragments<D>> frag_;  // null without fragment analysis
+  std::unique_ptr<RunSnapshots<D>> snaps_;
+  std::unique_ptr<Progress> progress_;
+  // wall times of the processes before this one (restart), checkpoint writing
+  double prior_wall_ = 0, prior_loop_wall_ = 0, ckpt_wall_ = 0;
+  long ckpt_written_ = 0;
+};
+
+// run_case's run of a prepared case in dimension D.
+template <int D>
+nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+                       const RunIdentity& id, const StateArrays* restart);
+
+extern template class RunLoop<2>;
+extern template class RunLoop<3>;
+
+}  // namespace fdem

@@ -1,0 +1,175 @@
+#include "solver/run_output.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace fdem {
+
+// ---- OutputSchedule ----
+
+OutputSchedule::OutputSchedule(const Case& c, double checkpoint_every)
+    : hist_dt_(c.history_interval > 0 ? c.history_interval : c.end_time / 200),
+      snap_dt_(c.snapshot_interval),
+      ckpt_dt_(checkpoint_every),
+      check_every_(c.check_interval),
+      next_snap_(c.snapshot_interval),
+      next_ckpt_(checkpoint_every) {}
+
+void OutputSchedule::stepped(bool row) {
+  last_was_row_ = row;
+  if (row) next_hist_ += hist_dt_;
+}
+
+bool OutputSchedule::take_snapshot(double t) {
+  if (!(snap_dt_ > 0 && t >= next_snap_ * (1 - 1e-12))) return false;
+  next_snap_ += snap_dt_;
+  return true;
+}
+
+bool OutputSchedule::take_checkpoint(double t) {
+  if (!(ckpt_dt_ > 0 && t >= next_ckpt_ * (1 - 1e-12))) return false;
+  while (next_ckpt_ <= t * (1 + 1e-12)) next_ckpt_ += ckpt_dt_;
+  return true;
+}
+
+void OutputSchedule::save(RunState& s) const {
+  s.next_history = next_hist_;
+  s.next_snapshot = next_snap_;
+  s.next_checkpoint = next_ckpt_;
+  s.checkpoint_every = ckpt_dt_;
+  s.last_was_row = last_was_row_;
+}
+
+void OutputSchedule::restore(const RunState& s, double t) {
+  next_hist_ = s.next_history;
+  next_snap_ = s.next_snapshot;
+  if (ckpt_dt_ > 0) {  // the next checkpoint after the restart point
+    next_ckpt_ = s.next_checkpoint;
+    if (!(next_ckpt_ > 0) || s.checkpoint_every != ckpt_dt_) {
+      next_ckpt_ = ckpt_dt_ * std::floor(t / ckpt_dt_);
+      while (next_ckpt_ <= t * (1 + 1e-12)) next_ckpt_ += ckpt_dt_;
+    }
+  }
+  last_was_row_ = s.last_was_row != 0;
+}
+
+// ---- RunFragments ----
+
+namespace {
+std::vector<std::string> fragment_columns() {
+  std::vector<std::string> fc = {"time [s]", "step", "fragments", "largest_fraction",
+                                 "largest_mass [kg]", "total_mass [kg]", "single_element_fragments"};
+  for (int b = 0; b < kFragmentBins; ++b) fc.push_back("count_" + FragmentStats::bin_name(b));
+  for (int b = 0; b < kFragmentBins; ++b) fc.push_back("mass_" + FragmentStats::bin_name(b));
+  return fc;
+}
+}  // namespace
+
+template <int D>
+RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out)
+    : analysis_(m), csv_(out + "/fragments.csv", fragment_columns()) {}
+
+template <int D>
+const FragmentStats& RunFragments<D>::now(const Simulation<D>& sim) {
+  if (step_ != sim.step_count) {
+    analysis_.compute(sim.m);
+    step_ = sim.step_count;
+  }
+  return analysis_.last();
+}
+
+template <int D>
+void RunFragments<D>::write_row(const Simulation<D>& sim, const Energies& e) {
+  const FragmentStats& fs = now(sim);  // the interface history is that of x(n), the instant of the row
+  std::vector<double> fr = {e.time, static_cast<double>(e.step), double(fs.count),
+                            fs.largest_fraction, fs.largest_mass, fs.total_mass,
+                            double(fs.single_element)};
+  for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_count[b]);
+  for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_mass_fraction[b]);
+  csv_.row(fr);
+}
+
+template <int D>
+void RunFragments<D>::element_ids(const Simulation<D>& sim, std::vector<int>& ids) {
+  now(sim);
+  analysis_.element_ids(ids);
+}
+
+template <int D>
+nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
+  const FragmentStats& fs = now(sim);
+  std::vector<double> masses = analysis_.masses();
+  std::sort(masses.begin(), masses.end(), [](double a, double b) { return a > b; });
+  std::vector<double> top;
+  for (size_t i = 0; i < masses.size() && i < 10; ++i)
+    top.push_back(fs.total_mass > 0 ? masses[i] / fs.total_mass : 0.0);
+  std::vector<std::string> edges;
+  for (int b = 0; b < kFragmentBins; ++b) edges.push_back(FragmentStats::bin_name(b));
+  return {{"count", fs.count},
+          {"largest_fraction", fs.largest_fraction},
+          {"largest_mass_kg", fs.largest_mass},
+          {"total_mass_kg", fs.total_mass},
+          {"single_element_fragments", fs.single_element},
+          {"largest_fractions", top},
+          {"distribution",
+           {{"bin_lower_edge", edges},
+            {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
+            {"mass_fraction",
+             std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}}};
+}
+
+// ---- RunSnapshots ----
+
+template <int D>
+RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh,
+                              const RunState* restart) {
+  if (restart) last_step_ = static_cast<long>(restart->last_snapshot_step);
+  if (!(c.snapshot_interval > 0)) return;
+  if (restart) {
+    const std::vector<long> steps(restart->snapshot_steps.begin(), restart->snapshot_steps.end());
+    std::string note;
+    writer_ = std::make_unique<SnapshotWriter>(out, mesh, steps, restart->snapshot_times, note);
+    if (!note.empty()) std::fprintf(stderr, "fdem: warning: %s\n", note.c_str());
+  } else {
+    writer_ = std::make_unique<SnapshotWriter>(out, mesh);
+  }
+}
+
+template <int D>
+void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
+  if (!writer_ || sim.step_count == last_step_) return;
+  last_step_ = sim.step_count;
+  sim.download(x_, u_, v_, stress_, damage_);
+  SnapshotFrame fr;
+  fr.time = sim.t;
+  fr.step = sim.step_count;
+  fr.x = x_.data();
+  fr.u = u_.data();
+  fr.v = v_.data();
+  fr.stress = stress_.data();
+  fr.damage = damage_.data();
+  if (frag) {
+    frag->element_ids(sim, fragment_);
+    fr.fragment = fragment_.data();
+  }
+  writer_->write(fr);
+}
+
+template <int D>
+void RunSnapshots<D>::save(RunState& s) const {
+  s.last_snapshot_step = last_step_;
+  s.snapshot_steps.clear();
+  s.snapshot_times.clear();
+  if (writer_) {
+    for (long x : writer_->steps()) s.snapshot_steps.push_back(x);
+    s.snapshot_times = writer_->times();
+  }
+}
+
+template class RunFragments<2>;
+template class RunFragments<3>;
+template class RunSnapshots<2>;
+template class RunSnapshots<3>;
+
+}  // namespace fdem

@@ -1,0 +1,92 @@
+#pragma once
+// The run's outputs besides history.csv (solver/history_table.hpp): when each output is due
+// (OutputSchedule), snapshots (RunSnapshots) and the fragment analysis (RunFragments).
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/case.hpp"
+#include "io/output.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/fragment_analysis.hpp"
+#include "solver/run_state.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+// Simulated times of the next history row, snapshot and checkpoint, and the step interval of the
+// stability checks. History rows and checks sample the state at the start of a step.
+class OutputSchedule {
+ public:
+  // checkpoint_every: s of simulated time (<= 0: none)
+  OutputSchedule(const Case& c, double checkpoint_every);
+  bool history_due(double t) const { return t >= next_hist_ * (1 - 1e-12); }
+  // step: the steps done before the one to come
+  bool check_due(long step) const { return check_every_ > 0 && (step + 1) % check_every_ == 0; }
+  // After a step; `row`: it was sampled for a history row (the next row is then one interval on).
+  void stepped(bool row);
+  bool last_was_row() const { return last_was_row_; }
+  // Due at time t (after a step): true, and the next one scheduled.
+  bool take_snapshot(double t);
+  bool take_checkpoint(double t);
+  double checkpoint_every() const { return ckpt_dt_; }
+
+  void save(RunState& s) const;
+  // t: the time of the restart point (the next checkpoint after it when the interval changed)
+  void restore(const RunState& s, double t);
+
+ private:
+  double hist_dt_, snap_dt_, ckpt_dt_;
+  long check_every_;
+  double next_hist_ = 0, next_snap_, next_ckpt_;
+  bool last_was_row_ = false;
+};
+
+// Fragments (runs with interfaces): fragments.csv at every history row, the fragment id of every
+// element for the snapshots and the final statistics for summary.json.
+template <int D>
+class RunFragments {
+ public:
+  // Starts out/fragments.csv.
+  RunFragments(const Model<D>& m, const std::string& out);
+  // Statistics of the present state (labelled once per step).
+  const FragmentStats& now(const Simulation<D>& sim);
+  // The row of the instant `e` of the last history row (the present state).
+  void write_row(const Simulation<D>& sim, const Energies& e);
+  void element_ids(const Simulation<D>& sim, std::vector<int>& ids);
+  nlohmann::json summary(const Simulation<D>& sim);
+
+ private:
+  FragmentAnalysis<D> analysis_;
+  HistoryWriter csv_;
+  long step_ = -1;  // the step the statistics are of
+};
+
+// Snapshots (when the case asks for them): out/snapshots.h5 + .xdmf, one frame per step at most.
+template <int D>
+class RunSnapshots {
+ public:
+  // restart: continue the file with the frames the checkpoint lists (a warning on stderr when
+  // that cannot be done and a new file is started).
+  RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh, const RunState* restart);
+  bool on() const { return writer_ != nullptr; }
+  int frames() const { return writer_ ? writer_->frames() : 0; }
+  // A frame of the present state, unless there is one of this step already.
+  void take(Simulation<D>& sim, RunFragments<D>* frag);
+  void save(RunState& s) const;
+
+ private:
+  std::unique_ptr<SnapshotWriter> writer_;
+  long last_step_ = -1;
+  std::vector<double> x_, u_, v_, stress_, damage_;
+  std::vector<int> fragment_;
+};
+
+extern template class RunFragments<2>;
+extern template class RunFragments<3>;
+extern template class RunSnapshots<2>;
+extern template class RunSnapshots<3>;
+
+}  // namespace fdem

@@ -1,0 +1,165 @@
+#include "solver/summary.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+namespace fdem {
+
+nlohmann::json mesh_report(const HostMesh& mesh) {
+  const auto q = mesh_quality(mesh);
+  return {{"nodes", mesh.num_nodes()},
+          {"elements", mesh.num_elems()},
+          {"interfaces", mesh.num_ifaces()},
+          {"regions", mesh.region_names},
+          {"quality",
+           {{"min_angle_deg", q.min_angle_deg},
+            {"max_aspect", q.max_aspect},
+            {"min_altitude_m", q.min_size},
+            {"mean_edge_m", q.mean_size}}}};
+}
+
+template <int D>
+nlohmann::json stable_report(const Simulation<D>& sim) {
+  nlohmann::json j = {{"dt_s", sim.dt},
+                      {"dt_critical_s", sim.stable.critical},
+                      {"dt_bulk_s", sim.stable.bulk},
+                      {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
+  // with contact that cannot act yet: the step once surfaces can meet
+  if (sim.stable.contact_pending) j["dt_critical_with_contact_s"] = sim.stable.critical_contact;
+  // the step changed during the run (contact's springs applied)
+  if (sim.dt_changed_at() >= 0) {
+    j["dt_before_contact_s"] = sim.dt_before_change();
+    j["dt_changed_at_step"] = sim.dt_changed_at();
+  }
+  return j;
+}
+
+template nlohmann::json stable_report(const Simulation<2>& sim);
+template nlohmann::json stable_report(const Simulation<3>& sim);
+
+nlohmann::json phases_report(const PhaseTimes& p) {
+  const double total = p.total();
+  nlohmann::json j;
+  auto add = [&](const char* name, double s) {
+    j[name] = {{"seconds", s}, {"share", total > 0 ? s / total : 0.0}};
+  };
+  add("forces", p.forces);
+  add("platens", p.platens);
+  add("contact", p.contact);
+  add("ledger", p.ledger);
+  add("nodes", p.nodes);
+  j["total_seconds"] = total;
+  j["steps"] = p.steps;
+  return j;
+}
+
+namespace {
+
+nlohmann::json energy_report(const Energies& e, double max_rel_error) {
+  return {{"kinetic_J", e.kinetic},
+          {"strain_J", e.strain},
+          {"interface_elastic_J", e.interface_elastic},
+          {"contact_elastic_J", e.contact_elastic},
+          {"fracture_J", e.fracture},
+          {"damping_J", e.damping},
+          {"friction_J", e.friction},
+          {"external_work_J", e.work_external},
+          {"balance_error_J", e.balance_error},
+          {"max_relative_balance_error", max_rel_error}};
+}
+
+template <int D>
+nlohmann::json results_report(const Case& c, const Simulation<D>& sim, const HistoryTable<D>& history) {
+  const std::vector<double>& peak = history.peak_load();
+  const int np = static_cast<int>(peak.size());
+  nlohmann::json results = nlohmann::json::object();
+  for (int p = 0; p < np; ++p) {
+    results["platens"][sim.platen_names()[p]] = {{"peak_load_N", peak[p]},
+                                                 {"displacement_at_peak_m", history.peak_displacement()[p]}};
+  }
+  if (np > 0) {
+    results["peak_load_N"] = peak[0];
+    if (D == 2 && c.mesh.kind == "disc" && np >= 2) {  // not for a disc striking one plate
+      // Brazilian test: sigma_t = 2 P / (pi D L)
+      results["tensile_strength_Pa"] = 2 * peak[0] / (M_PI * 2 * c.mesh.radius * c.thickness);
+    }
+  }
+  return results;
+}
+
+nlohmann::json checkpoint_report(const RunRecord& r) {
+  nlohmann::json ck = {{"file", r.checkpoint_file}, {"every_s", r.checkpoint_every},
+                       {"written", r.checkpoints_written}, {"write_seconds", r.checkpoint_seconds}};
+  if (r.restart)
+    ck["restarted_from"] = {{"file", r.restart->file},
+                            {"step", r.restart->get_int("simulation/step")},
+                            {"time_s", r.restart->get("simulation/time")}};
+  return ck;
+}
+
+template <int D>
+nlohmann::json contact_report(ContactSystem<D>& ct) {
+  return {{"interfaces_handed_over", ct.handed_over()},
+          {"surface_nodes", ct.surface_nodes()},
+          {"candidate_pairs", ct.candidates()},
+          {"active_contacts", ct.active_contacts()},
+          {"grid_builds", ct.builds()},
+          {"stable_step_s", ct.stable_step()}};
+}
+
+}  // namespace
+
+template <int D>
+nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& sim,
+                           const HistoryTable<D>& history, RunFragments<D>* frag, const RunRecord& r) {
+  const Energies& last = history.last();
+  nlohmann::json summary;
+  summary["case"] = c.name;
+  summary["dimension"] = D;
+  summary["counts"] = mesh_report(mesh);
+  summary["counts"]["boundary_nodes"] = r.boundary_nodes;
+  summary["time_step"] = stable_report(sim);
+  summary["steps"] = sim.step_count;
+  summary["end_time_s"] = sim.t;
+  summary["stop_reason"] = r.stop_reason;
+  summary["wall_seconds"] = r.wall_seconds;
+  summary["loop_wall_seconds"] = r.loop_wall_seconds;
+  summary["element_steps_per_second"] =
+      r.loop_wall_seconds > 0 ? sim.step_count * double(sim.m.ne) / r.loop_wall_seconds : 0;
+  summary["phases"] = phases_report(sim.phase_times());
+  summary["energy"] = energy_report(last, history.max_relative_balance_error());
+  summary["interfaces_damaged"] = last.damaged;
+  summary["interfaces_failed"] = last.failed;
+  summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
+  if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct);
+  if (frag) summary["fragments"] = frag->summary(sim);
+  summary["results"] = results_report(c, sim, history);
+  if (r.checkpoint_every > 0 || r.restart) summary["checkpoint"] = checkpoint_report(r);
+  summary["outputs"] = {{"history", r.out + "/history.csv"},
+                        {"summary", r.out + "/summary.json"},
+                        {"case", r.out + "/case.json"}};
+  if (r.snapshots) summary["outputs"]["snapshots"] = r.out + "/snapshots.xdmf";
+  if (frag) summary["outputs"]["fragments"] = r.out + "/fragments.csv";
+  return summary;
+}
+
+template nlohmann::json run_summary(const Case&, const HostMesh&, Simulation<2>&, const HistoryTable<2>&,
+                                    RunFragments<2>*, const RunRecord&);
+template nlohmann::json run_summary(const Case&, const HostMesh&, Simulation<3>&, const HistoryTable<3>&,
+                                    RunFragments<3>*, const RunRecord&);
+
+void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress) {
+  if (progress) {
+    std::fprintf(stderr, "fdem: %ld steps in %.1f s (%.3g element-steps/s); stopped by %s\n", steps,
+                 r.loop_wall_seconds, summary["element_steps_per_second"].get<double>(),
+                 r.stop_reason.c_str());
+  }
+  const char* out = r.out.c_str();
+  std::printf("results: %s\n", out);
+  std::printf("  history:   %s/history.csv\n  summary:   %s/summary.json\n", out, out);
+  if (r.snapshots) std::printf("  snapshots: %s/snapshots.xdmf (open in ParaView)\n", out);
+  std::fflush(stdout);
+}
+
+}  // namespace fdem

@@ -1,0 +1,49 @@
+#pragma once
+// summary.json of a run, and the reports `fdem check` shares with it.
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "io/case.hpp"
+#include "io/checkpoint.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/history_table.hpp"
+#include "solver/run_output.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+// Counts and quality of a prepared mesh.
+nlohmann::json mesh_report(const HostMesh& mesh);
+
+// The time step: used, critical, and its parts (and its change when contact's springs applied).
+template <int D>
+nlohmann::json stable_report(const Simulation<D>& sim);
+
+// Wall time of each phase of the time step in this process (seconds and share of their sum).
+nlohmann::json phases_report(const PhaseTimes& p);
+
+// What the run loop knows at the end besides the simulation, its history and fragments.
+struct RunRecord {
+  std::string out;  // output folder
+  int boundary_nodes = 0;  // before contact adds crack faces to the platens' nodes
+  std::string stop_reason;
+  double wall_seconds = 0, loop_wall_seconds = 0;  // all processes of the run
+  bool snapshots = false;
+  // checkpoints: an entry when they are written or the run restarted
+  std::string checkpoint_file;
+  double checkpoint_every = 0, checkpoint_seconds = 0;
+  long checkpoints_written = 0;
+  const StateArrays* restart = nullptr;  // the checkpoint the run went on from
+};
+
+// The summary of a finished run (frag: null without fragment analysis).
+template <int D>
+nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& sim,
+                           const HistoryTable<D>& history, RunFragments<D>* frag, const RunRecord& r);
+
+// The closing lines: steps and throughput on stderr (with progress on), where the results are
+// on stdout.
+void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress);
+
+}  // namespace fdem
