@@ -1,0 +1,228 @@
+// Case schema, second part: boundary conditions, platens, contact, damping, time and output.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "io/case_internal.hpp"
+
+namespace fdem::case_detail {
+namespace {
+
+// "boundary.fixed": [{"set", "components"}], velocity 0.
+void read_fixed(json& b, Case& c, const Reader& R) {
+  const int d = c.dim;
+  const std::string P = "boundary";
+  json& fixed = R.array(b, P, "fixed", false);
+  for (size_t i = 0; i < fixed.size(); ++i) {
+    const std::string p = child(child(P, "fixed"), i);
+    R.keys(fixed[i], p, {"set", "components"});
+    VelocityBC bc;
+    bc.set = R.name(fixed[i], p, "set");
+    bc.active = R.components(fixed[i], p, d);
+    c.velocity_bcs.push_back(bc);
+  }
+}
+
+// "boundary.velocity": [{"set", "velocity", "components", "ramp_time"}].
+void read_velocity(json& b, Case& c, const Reader& R) {
+  const int d = c.dim;
+  const std::string P = "boundary";
+  json& vel = R.array(b, P, "velocity", false);
+  for (size_t i = 0; i < vel.size(); ++i) {
+    const std::string p = child(child(P, "velocity"), i);
+    R.keys(vel[i], p, {"set", "velocity", "components", "ramp_time"});
+    VelocityBC bc;
+    bc.set = R.name(vel[i], p, "set");
+    bc.velocity = R.vec(vel[i], p, "velocity", d);
+    bc.active = R.components(vel[i], p, d);
+    for (int k = 0; k < d; ++k)
+      if (!bc.active[k] && bc.velocity[k] != 0.0)
+        R.fail(child(child(p, "velocity"), static_cast<size_t>(k)),
+               "component " + std::string(1, "xyz"[k]) + " is " + fmt_num(bc.velocity[k]) +
+                   " but is not in components '" + vel[i]["components"].get<std::string>() +
+                   "' (allowed: 0, or add it to components)");
+    bc.ramp_time = R.number(vel[i], p, "ramp_time", ge(0), 0.0);
+    c.velocity_bcs.push_back(bc);
+  }
+}
+
+// "boundary.point_loads": [{"set", "force"}].
+void read_point_loads(json& b, Case& c, const Reader& R) {
+  const int d = c.dim;
+  const std::string P = "boundary";
+  json& loads = R.array(b, P, "point_loads", false);
+  for (size_t i = 0; i < loads.size(); ++i) {
+    const std::string p = child(child(P, "point_loads"), i);
+    R.keys(loads[i], p, {"set", "force"});
+    PointLoad pl;
+    pl.set = R.name(loads[i], p, "set");
+    pl.force = R.vec(loads[i], p, "force", d);
+    c.point_loads.push_back(pl);
+  }
+}
+
+// "boundary.initial_velocity": [{"region" (default "all"), "velocity"}].
+void read_initial_velocity(json& b, Case& c, const Reader& R) {
+  const int d = c.dim;
+  const std::string P = "boundary";
+  json& iv = R.array(b, P, "initial_velocity", false);
+  std::vector<std::string> known;
+  for (const auto& kv : c.region_material) known.push_back(kv.first);
+  for (size_t i = 0; i < iv.size(); ++i) {
+    const std::string p = child(child(P, "initial_velocity"), i);
+    R.keys(iv[i], p, {"region", "velocity"});
+    InitialVelocity v;
+    v.region = R.name(iv[i], p, "region", std::string("all"));
+    if (v.region != "all" && !c.region_material.count(v.region))
+      R.fail(child(p, "region"), "region '" + v.region + "' has no material in 'regions'" +
+                                     did_you_mean(v.region, known) + " (allowed: 'all', " +
+                                     quoted_list(known) + ")");
+    v.velocity = R.vec(iv[i], p, "velocity", d);
+    c.initial_velocities.push_back(v);
+  }
+}
+
+}  // namespace
+
+void read_boundary(json& doc, Case& c, const Reader& R) {
+  const int d = c.dim;
+  json& b = R.object(doc, "", "boundary", false);
+  const std::string P = "boundary";
+  R.keys(b, P, {"fixed", "velocity", "point_loads", "gravity", "initial_velocity"});
+  read_fixed(b, c, R);
+  read_velocity(b, c, R);
+  read_point_loads(b, c, R);
+  c.gravity = R.vec(b, P, "gravity", d, Vec3{0, 0, 0});
+  read_initial_velocity(b, c, R);
+}
+
+void read_platens(json& doc, Case& c, const Reader& R) {
+  const int d = c.dim;
+  json& pl = R.array(doc, "", "platens", false);
+  for (size_t i = 0; i < pl.size(); ++i) {
+    const std::string p = child("platens", i);
+    R.keys(pl[i], p, {"name", "point", "normal", "velocity", "kn", "ks", "friction", "cohesion"});
+    PlatenSpec s;
+    s.name = R.name(pl[i], p, "name");
+    for (const auto& o : c.platens)
+      if (o.name == s.name) R.fail(child(p, "name"), "platen name '" + s.name + "' is used twice");
+    s.point = R.vec(pl[i], p, "point", d);
+    Vec3 n = R.vec(pl[i], p, "normal", d);
+    double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 0))
+      R.fail(child(p, "normal"), "the normal is zero (allowed: any non-zero vector; it is normalised)");
+    for (auto& x : n) x /= len;
+    s.normal = n;
+    s.velocity = R.vec(pl[i], p, "velocity", d, Vec3{0, 0, 0});
+    s.kn = R.number(pl[i], p, "kn", ge(0), 0.0);
+    s.ks = R.number(pl[i], p, "ks", ge(0), 0.0);
+    s.friction = R.number(pl[i], p, "friction", ge(0), 0.0);
+    s.cohesion = R.number(pl[i], p, "cohesion", ge(0), 0.0);
+    c.platens.push_back(s);
+  }
+}
+
+void read_contact(json& doc, Case& c, const Reader& R) {
+  json& ct = R.object(doc, "", "contact", false);
+  const std::string P = "contact";
+  R.keys(ct, P, {"enabled", "kn", "ks", "friction", "cohesion", "skin"});
+  auto it = ct.find("enabled");
+  if (it == ct.end()) {
+    ct["enabled"] = "auto";
+    c.contact.enabled = -1;
+  } else if (it->is_boolean()) {
+    c.contact.enabled = it->get<bool>() ? 1 : 0;
+  } else if (it->is_string() && it->get<std::string>() == "auto") {
+    c.contact.enabled = -1;
+  } else {
+    R.fail(child(P, "enabled"), "expected true, false or \"auto\", got " + describe(*it));
+  }
+  c.contact.kn = R.number(ct, P, "kn", ge(0), 0.0);
+  c.contact.ks = R.number(ct, P, "ks", ge(0), 0.0);
+  const double mu0 =
+      c.fracture_material >= 0 ? std::tan(c.interface_materials[c.fracture_material].phi) : 0.0;
+  c.contact.friction = R.number(ct, P, "friction", ge(0), mu0);
+  c.contact.cohesion = R.number(ct, P, "cohesion", ge(0), 0.0);
+  c.contact.skin = R.number(ct, P, "skin", ge(0), 0.0);
+}
+
+void read_damping(json& doc, Case& c, const Reader& R) {
+  json& dmp = R.object(doc, "", "damping", false);
+  R.keys(dmp, "damping", {"local", "mass_proportional", "change"});
+  c.local_damping = R.number(dmp, "damping", "local", between(0, false, 1, true), 0.0);
+  c.mass_damping = R.number(dmp, "damping", "mass_proportional", ge(0), 0.0);
+  if (dmp.contains("change")) {
+    json& ch = R.object(dmp, "damping", "change", false);
+    const std::string cp = "damping.change";
+    R.keys(ch, cp, {"time", "local", "mass_proportional"});
+    c.damping_change_time = R.number(ch, cp, "time", ge(0));
+    c.damping_change_local = R.number(ch, cp, "local", between(0, false, 1, true), 0.0);
+    c.damping_change_mass = R.number(ch, cp, "mass_proportional", ge(0), 0.0);
+  }
+}
+
+void read_time(json& doc, Case& c, const Reader& R) {
+  json& t = R.object(doc, "", "time", true);
+  const std::string P = "time";
+  R.keys(t, P, {"safety_factor", "dt", "end_time", "max_steps", "stop", "check_interval"});
+  c.safety_factor = R.number(t, P, "safety_factor", between(0, true, 2, false), 0.5);
+  c.dt = R.number(t, P, "dt", ge(0), 0.0);
+  c.end_time = R.number(t, P, "end_time", gt(0));
+  c.max_steps = R.integer(t, P, "max_steps", 0, std::numeric_limits<long>::max(), 0L);
+  c.check_interval =
+      static_cast<int>(R.integer(t, P, "check_interval", 1, std::numeric_limits<int>::max(), 100L));
+  if (t.contains("stop")) {
+    json& s = R.object(t, P, "stop", false);
+    const std::string sp = "time.stop";
+    R.keys(s, sp, {"platen", "drop_fraction"});
+    std::string name = R.string(s, sp, "platen");
+    std::vector<std::string> names;
+    for (const auto& p : c.platens) names.push_back(p.name);
+    if (std::find(names.begin(), names.end(), name) == names.end())
+      R.fail(child(sp, "platen"), "no platen named '" + name + "'" + did_you_mean(name, names) +
+                                      " (platens: " + quoted_list(names, false) + ")");
+    c.stop_platen = name;
+    c.stop_drop_fraction = R.number(s, sp, "drop_fraction", between(0, true, 1, true));
+  }
+}
+
+void read_output(json& doc, Case& c, const Reader& R) {
+  json& o = R.object(doc, "", "output", false);
+  const std::string P = "output";
+  R.keys(o, P, {"history_interval", "history_rows", "snapshot_interval", "snapshot_count", "monitors",
+                "fragments", "checkpoint_every"});
+  if (o.contains("monitors")) {
+    json& arr = R.array(o, P, "monitors", false);
+    for (size_t i = 0; i < arr.size(); ++i)
+      c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
+  }
+  if (o.contains("history_interval") && o.contains("history_rows"))
+    R.fail(P, "give either 'history_interval' or 'history_rows', not both");
+  if (o.contains("snapshot_interval") && o.contains("snapshot_count"))
+    R.fail(P, "give either 'snapshot_interval' or 'snapshot_count', not both");
+  if (o.contains("history_interval")) {
+    c.history_interval = R.number(o, P, "history_interval", gt(0));
+  } else {
+    long rows = R.integer(o, P, "history_rows", 1, 100000000L, 200L);
+    c.history_interval = c.end_time / static_cast<double>(rows);
+  }
+  if (o.contains("snapshot_interval")) {
+    c.snapshot_interval = R.number(o, P, "snapshot_interval", ge(0));
+  } else {
+    long n = R.integer(o, P, "snapshot_count", 0, 1000000L, 0L);
+    c.snapshot_interval = n > 0 ? c.end_time / static_cast<double>(n) : 0.0;
+  }
+  if (o.contains("fragments")) {
+    if (!o["fragments"].is_boolean())
+      R.fail(child(P, "fragments"), "expected true or false, got " + describe(o["fragments"]));
+    c.output_fragments = o["fragments"].get<bool>();
+  } else {
+    o["fragments"] = true;
+  }
+  if (o.contains("checkpoint_every")) c.checkpoint_every = R.number(o, P, "checkpoint_every", ge(0));
+}
+
+
+}  // namespace fdem::case_detail

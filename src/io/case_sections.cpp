@@ -1,0 +1,221 @@
+// Case schema, first part: mesh, analysis, materials and regions, interface materials and fracture.
+#include <algorithm>
+#include <cctype>
+#include <optional>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "io/case_internal.hpp"
+
+namespace fdem::case_detail {
+namespace {
+
+namespace fs = std::filesystem;
+
+// "mesh": {"file": ..., "element_size": ...}: a Gmsh mesh or geometry file.
+void read_mesh_file(json& m, MeshSpec& s, const Reader& R, const fs::path& base_dir,
+                    bool check_files) {
+  const std::string P = "mesh";
+  R.keys(m, P, {"file", "element_size"});
+  std::string f = R.string(m, P, "file");
+  if (f.empty()) R.fail(child(P, "file"), "empty file name");
+  if (m.contains("element_size")) {
+    std::string ext = fs::path(f).extension().string();
+    for (auto& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext != ".geo")
+      R.fail(child(P, "element_size"), "applies to Gmsh geometry files (.geo) only, which are "
+                                       "meshed on reading; '" + f + "' is a mesh already");
+    s.element_size = R.number(m, P, "element_size", gt(0));
+  }
+  fs::path p(f);
+  if (p.is_relative()) p = base_dir / p;
+  p = p.lexically_normal();
+  s.kind = "file";
+  s.file = p.string();
+  if (check_files) {
+    std::error_code ec;
+    if (!fs::exists(p, ec))
+      R.fail(child(P, "file"), "mesh file '" + f + "' does not exist (looked for '" + s.file +
+                                   "'; a relative path is taken from the case file's folder)");
+    if (!fs::is_regular_file(p, ec))
+      R.fail(child(P, "file"), "'" + s.file + "' is not a regular file");
+  }
+  std::error_code ec;
+  fs::path abs = fs::absolute(p, ec);
+  m["file"] = ec ? s.file : abs.lexically_normal().string();
+}
+
+// Rectangle (2D) or box (3D): origin, size, and cells per direction and/or element_size.
+void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, const Reader& R) {
+  const std::string P = "mesh";
+  R.keys(m, P, {"generator", "origin", "size", "cells", "element_size", "region"});
+  Vec3 o = R.vec(m, P, "origin", d, Vec3{0, 0, 0});
+  Vec3 sz = R.vec(m, P, "size", d, std::nullopt, gt(0));
+  s.origin = o;
+  s.size = sz;
+  const bool has_cells = m.contains("cells"), has_h = m.contains("element_size");
+  if (!has_cells && !has_h)
+    R.fail(P, "give 'cells' (cells per direction) or 'element_size' for generator '" + g + "'");
+  if (has_cells) {
+    const json& cj = m["cells"];
+    const std::string cp = child(P, "cells");
+    if (!cj.is_array() || static_cast<int>(cj.size()) != d)
+      R.fail(cp, "expected an array of " + std::to_string(d) + " integers, got " +
+                     (cj.is_array() ? std::to_string(cj.size()) + " elements" : describe(cj)));
+    for (int i = 0; i < d; ++i)
+      s.cells[i] = static_cast<int>(R.integer_value(cj[i], child(cp, i), 1, 100000000));
+  }
+  if (has_h) s.element_size = R.number(m, P, "element_size", gt(0));
+}
+
+// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere (3D).
+void read_mesh_generator(json& m, Case& c, const Reader& R) {
+  const std::string P = "mesh";
+  MeshSpec& s = c.mesh;
+  const std::vector<std::string> gens = {"rectangle", "disc", "box", "sphere"};
+  std::string g = R.string(m, P, "generator");
+  if (std::find(gens.begin(), gens.end(), g) == gens.end())
+    R.fail(child(P, "generator"), "unknown generator '" + g + "'" + did_you_mean(g, gens) +
+                                      " (allowed: rectangle, disc (2D); box, sphere (3D))");
+  const bool is2 = g == "rectangle" || g == "disc";
+  if ((is2 ? 2 : 3) != c.dim)
+    R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
+                                      " mesh but dimension is " + std::to_string(c.dim) +
+                                      " (allowed: " + (c.dim == 2 ? "rectangle, disc" : "box, sphere") + ")");
+  s.kind = g;
+  const int d = c.dim;
+  if (g == "rectangle" || g == "box") {
+    read_block_generator(m, s, d, g, R);
+  } else {
+    R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
+    s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
+    s.radius = R.number(m, P, "radius", gt(0));
+    s.element_size = R.number(m, P, "element_size", between(0, true, s.radius, false));
+  }
+  s.region = R.name(m, P, "region", std::string("body"));
+}
+
+// "fracture": the fracturable regions, their interface material and the strength reduction.
+void read_fracture(json& doc, Case& c, const Reader& R) {
+  json& f = R.object(doc, "", "fracture", false);
+  R.keys(f, "fracture", {"regions", "interface_material", "strength_reduction"});
+  if (f.contains("strength_reduction")) {
+    json& sr = R.object(f, "fracture", "strength_reduction", false);
+    const std::string sp = "fracture.strength_reduction";
+    R.keys(sr, sp, {"initial", "start_time", "rate"});
+    c.srf_initial = R.number(sr, sp, "initial", gt(0), 1.0);
+    c.srf_start = R.number(sr, sp, "start_time", ge(0), 0.0);
+    c.srf_rate = R.number(sr, sp, "rate", ge(0), 0.0);
+  }
+  json& regs = R.array(f, "fracture", "regions", true);
+  if (regs.empty())
+    R.fail("fracture.regions", "at least one region is needed (omit 'fracture' for no fracture)");
+  std::vector<std::string> known;
+  for (const auto& kv : c.region_material) known.push_back(kv.first);
+  for (size_t i = 0; i < regs.size(); ++i) {
+    const std::string p = child("fracture.regions", i);
+    std::string r = R.string_value(regs[i], p);
+    if (!c.region_material.count(r))
+      R.fail(p, "region '" + r + "' has no material in 'regions'" + did_you_mean(r, known) +
+                    " (regions: " + quoted_list(known) + ")");
+    if (std::find(c.fracturable_regions.begin(), c.fracturable_regions.end(), r) !=
+        c.fracturable_regions.end())
+      R.fail(p, "region '" + r + "' is listed twice");
+    c.fracturable_regions.push_back(r);
+  }
+  std::vector<std::string> names;
+  for (const auto& m : c.interface_materials) names.push_back(m.name);
+  std::string im = R.string(f, "fracture", "interface_material");
+  auto it = std::find(names.begin(), names.end(), im);
+  if (it == names.end())
+    R.fail("fracture.interface_material",
+           "unknown interface material '" + im + "'" + did_you_mean(im, names) +
+               " (interface_materials: " + quoted_list(names) + ")");
+  c.fracture_material = static_cast<int>(it - names.begin());
+}
+
+}  // namespace
+
+void read_mesh(json& doc, Case& c, const Reader& R, const fs::path& base_dir, bool check_files) {
+  json& m = R.object(doc, "", "mesh", true);
+  const std::string P = "mesh";
+  const bool has_file = m.contains("file"), has_gen = m.contains("generator");
+  if (has_file && has_gen) R.fail(P, "give either 'file' or 'generator', not both");
+  if (!has_file && !has_gen) {
+    if (!m.empty()) R.keys(m, P, {"file", "generator"});
+    R.fail(P, "give either 'file' (a Gmsh .msh or .geo file) or 'generator' (rectangle, disc, box, sphere)");
+  }
+  if (has_file) {
+    read_mesh_file(m, c.mesh, R, base_dir, check_files);
+    return;
+  }
+  read_mesh_generator(m, c, R);
+}
+
+void read_analysis(json& doc, Case& c, const Reader& R) {
+  if (c.dim != 2) {
+    if (doc.contains("analysis"))
+      R.fail("analysis", "applies to dimension 2 only (plane stress/strain and thickness)");
+    return;
+  }
+  json& a = R.object(doc, "", "analysis", false);
+  R.keys(a, "analysis", {"plane", "thickness"});
+  std::string plane = R.string(a, "analysis", "plane", std::string("strain"));
+  if (plane != "stress" && plane != "strain")
+    R.fail("analysis.plane", "'" + plane + "' is not allowed (allowed: \"stress\", \"strain\")");
+  c.plane_stress = plane == "stress";
+  c.thickness = R.number(a, "analysis", "thickness", gt(0), 1.0);
+}
+
+void read_materials(json& doc, Case& c, const Reader& R) {
+  json& mats = R.object(doc, "", "materials", true);
+  if (mats.empty()) R.fail("materials", "at least one material is needed");
+  for (auto it = mats.begin(); it != mats.end(); ++it) {
+    const std::string p = child("materials", it.key());
+    if (!valid_name(it.key())) R.fail(p, "'" + it.key() + "' is not a valid material name");
+    R.keys(*it, p, {"density", "E", "nu"});
+    BulkMaterial m;
+    m.name = it.key();
+    m.density = R.number(*it, p, "density", gt(0));
+    m.E = R.number(*it, p, "E", gt(0));
+    m.nu = R.number(*it, p, "nu", between(-1, true, 0.5, true));
+    c.materials.push_back(m);
+  }
+  json& regs = R.object(doc, "", "regions", true);
+  if (regs.empty()) R.fail("regions", "at least one region -> material entry is needed");
+  std::vector<std::string> names;
+  for (const auto& m : c.materials) names.push_back(m.name);
+  for (auto it = regs.begin(); it != regs.end(); ++it) {
+    const std::string p = child("regions", it.key());
+    std::string mat = R.string_value(*it, p);
+    auto f = std::find(names.begin(), names.end(), mat);
+    if (f == names.end())
+      R.fail(p, "unknown material '" + mat + "'" + did_you_mean(mat, names) +
+                    " (materials: " + quoted_list(names) + ")");
+    c.region_material[it.key()] = static_cast<int>(f - names.begin());
+  }
+}
+
+void read_interfaces(json& doc, Case& c, const Reader& R) {
+  json& ims = R.object(doc, "", "interface_materials", false);
+  for (auto it = ims.begin(); it != ims.end(); ++it) {
+    const std::string p = child("interface_materials", it.key());
+    if (!valid_name(it.key())) R.fail(p, "'" + it.key() + "' is not a valid material name");
+    R.keys(*it, p, {"kn", "ks", "ft", "c", "phi_deg", "Gnc", "Gsc", "eta"});
+    InterfaceMaterial m;
+    m.name = it.key();
+    m.kn = R.number(*it, p, "kn", gt(0));
+    m.ks = R.number(*it, p, "ks", gt(0));
+    m.ft = R.number(*it, p, "ft", ge(0));
+    m.c = R.number(*it, p, "c", ge(0));
+    m.phi = R.number(*it, p, "phi_deg", between(0, false, 90, true)) * kPi / 180.0;
+    m.Gnc = R.number(*it, p, "Gnc", gt(0));
+    m.Gsc = R.number(*it, p, "Gsc", gt(0));
+    m.eta = R.number(*it, p, "eta", gt(0), 2.0);
+    c.interface_materials.push_back(m);
+  }
+  if (doc.contains("fracture")) read_fracture(doc, c, R);
+}
+
+}  // namespace fdem::case_detail
