@@ -73,7 +73,8 @@ double build_platens(const Case& c, const HostMesh& mesh, const std::vector<doub
 // With contact: the platen springs' stable step on every potential surface node at its largest
 // contact area amax (ContactSystem::potential_area).
 template <int D>
-double platen_surface_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass);
+double platen_surface_step(const Model<D>& m, const std::vector<double>& amax,
+                           const std::vector<double>& mass);
 
 // Velocity BCs: the BC table (one entry per BC, plus merged entries where sets overlap), per node
 // its entry (-1: free), per BC its name and its node list (reactions).

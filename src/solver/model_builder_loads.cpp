@@ -117,12 +117,14 @@ double build_platens(const Case& c, const HostMesh& mesh, const std::vector<doub
 }
 
 template <int D>
-double platen_surface_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass) {
+double platen_surface_step(const Model<D>& m, const std::vector<double>& amax,
+                           const std::vector<double>& mass) {
   double step = std::numeric_limits<double>::infinity();
   for (int p = 0; p < m.platens.count; ++p) {
     const PlatenDev& P = m.platens.p[p];
     for (int i = 0; i < m.nn; ++i)
-      if (amax[i] > 0 && mass[i] > 0) step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
+      if (amax[i] > 0 && mass[i] > 0)
+        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
   }
   return step;
 }
@@ -205,8 +207,10 @@ void set_initial_velocities(const Case& c, const HostMesh& mesh, const VelocityB
       const int r = iv.region == "all" ? -1 : mesh.region_index(iv.region);
       for (int e = 0; e < m.ne; ++e)
         if (r < 0 || mesh.elem_region[e] == r)
-          for (int a = 0; a < D + 1; ++a)
-            for (int k = 0; k < D; ++k) v_h(mesh.elems[static_cast<size_t>(e) * (D + 1) + a], k) = iv.velocity[k];
+          for (int a = 0; a < D + 1; ++a) {
+            const int i = mesh.elems[static_cast<size_t>(e) * (D + 1) + a];
+            for (int k = 0; k < D; ++k) v_h(i, k) = iv.velocity[k];
+          }
     }
     Kokkos::deep_copy(m.v, v_h);
   }

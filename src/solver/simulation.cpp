@@ -16,7 +16,8 @@ namespace fdem {
 template <int D>
 void Simulation<D>::set_strength_reduction(double factor) {
   if (!(factor > 0) || !std::isfinite(factor))
-    throw InputError("strength reduction factor must be positive and finite (got " + std::to_string(factor) + ")");
+    throw InputError("strength reduction factor must be positive and finite (got " + std::to_string(factor) +
+                     ")");
   srf_ = factor;
   m.coh.ft = coh0_.ft / factor;
   m.coh.c = coh0_.c / factor;
@@ -328,7 +329,8 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
   f.values("model/cohesive", kCohesiveArraySize, [&] { return to_array(m.coh); },
            [&](const std::vector<double>& a) { m.coh = cohesive_params_from_array(a.data()); });
   // older checkpoints: no reduction applied yet
-  f.values("simulation/strength_reduction", 3, [&] { return std::array<double, 3>{srf_, srf_hist_, m.coh.rescale}; },
+  f.values("simulation/strength_reduction", 3,
+           [&] { return std::array<double, 3>{srf_, srf_hist_, m.coh.rescale}; },
            [&](const std::vector<double>& a) {
              srf_ = a[0];
              srf_hist_ = a[1];
@@ -359,7 +361,8 @@ void Simulation<D>::load_state(const StateArrays& s) {
   const double saved_dt = s.get("simulation/dt");
   // The step of this case at the checkpoint: before or after contact's stable step applied
   // (checkpoints written before that was lazy have no flag: the contact step from the start).
-  const bool pending = s.has("simulation/contact_step_pending") && s.get_int("simulation/contact_step_pending") != 0;
+  const bool pending =
+      s.has("simulation/contact_step_pending") && s.get_int("simulation/contact_step_pending") != 0;
   if (stable.contact_pending && !pending) {
     take_contact_step();
     if (saved_dt != dt)

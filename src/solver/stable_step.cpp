@@ -13,7 +13,8 @@ TimeStep decide_stable_step(const StepContributions& c, bool contact_now, double
   s.springs_contact = s.springs;
   if (c.has_contact) s.springs_contact = std::min({s.springs, c.contact, c.platens_on_surfaces});
   auto combine = [&](double springs) {
-    return 1.0 / std::sqrt(1.0 / (s.bulk * s.bulk) + (std::isfinite(springs) ? 1.0 / (springs * springs) : 0.0));
+    return 1.0 / std::sqrt(1.0 / (s.bulk * s.bulk) +
+                           (std::isfinite(springs) ? 1.0 / (springs * springs) : 0.0));
   };
   s.critical_contact = combine(s.springs_contact);
   // Until surfaces can meet (a single body whose interfaces are all intact) the contact springs
