@@ -3,6 +3,8 @@
 // traction-separation with scalar damage, Mohr-Coulomb initiation with tension cut-off, and
 // Benzeggagh-Kenane mixed-mode linear softening. Irreversible (damage follows the largest
 // equivalent separation reached). Compression is never damaged (penalty).
+#include <array>
+
 #include "kernels/fdem_kokkos.hpp"
 
 namespace fdem {
@@ -18,6 +20,16 @@ struct CohesiveParams {
   // cohesive_update moves the softening envelope of initiated points with it (below).
   double rescale = 1.0;
 };
+
+// The parameters as the 8 values of the checkpoint entry "model/cohesive" (kn, ks, ft, c, tanphi,
+// Gnc, Gsc, eta; rescale is not among them), and back (rescale = 1).
+constexpr int kCohesiveArraySize = 8;
+inline std::array<double, kCohesiveArraySize> to_array(const CohesiveParams& p) {
+  return {p.kn, p.ks, p.ft, p.c, p.tanphi, p.Gnc, p.Gsc, p.eta};
+}
+inline CohesiveParams cohesive_params_from_array(const double* a) {
+  return CohesiveParams{a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]};
+}
 
 // History of one integration point. dm0 == 0: not initiated yet. After initiation:
 // dm0 = equivalent separation at initiation, dmf = at complete failure (from the mixed-mode

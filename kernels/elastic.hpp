@@ -1,7 +1,7 @@
 #pragma once
 // Bulk elements: constant-strain simplices (3-node triangles, 4-node tetrahedra), objective
-// finite-rotation elasticity by the total-Lagrangian St Venant-Kirchhoff law (docs/theory.md section 3,
-// choice documented in docs/theory.md): F = dx/dX, E = (F^T F - I)/2, S = lambda tr(E) I + 2 mu E,
+// finite-rotation elasticity by the total-Lagrangian St Venant-Kirchhoff law (docs/theory.md
+// section 3, where the choice is documented): F = dx/dX, E = (F^T F - I)/2, S = lambda tr(E) I + 2 mu E,
 // nodal forces f_a = -V0 F S grad0(N_a). A rigid rotation gives E = 0 exactly, so no stress.
 #include "kernels/fdem_kokkos.hpp"
 

@@ -52,6 +52,30 @@ KOKKOS_INLINE_FUNCTION bool interface_failed(const Kokkos::View<double* [D][4]>&
   return true;
 }
 
+// used(i) = 1 for every node of an element (orphan nodes of a mesh file are no fragment).
+template <int D>
+void mark_used(const Model<D>& m, const Kokkos::View<int*>& used) {
+  auto elem = m.elem;
+  auto U = used;
+  Kokkos::deep_copy(U, 0);
+  Kokkos::parallel_for(
+      "fdem::fragments::used", Kokkos::RangePolicy<ExecSpace>(0, m.ne), KOKKOS_LAMBDA(const int e) {
+        for (int a = 0; a < D + 1; ++a) Kokkos::atomic_fetch_or(&U(elem(e, a)), 1);
+      });
+}
+
+// Element mass rho V0.
+template <int D>
+void element_masses(const Model<D>& m, const Kokkos::View<double*>& out) {
+  auto vol0 = m.vol0;
+  auto emat = m.emat;
+  auto mat = m.mat;
+  auto M = out;
+  Kokkos::parallel_for(
+      "fdem::fragments::emass", Kokkos::RangePolicy<ExecSpace>(0, m.ne),
+      KOKKOS_LAMBDA(const int e) { M(e) = mat(emat(e), 2) * vol0(e); });
+}
+
 // Node labels: on return lab(i) is the smallest node index of i's component. par is work space of
 // the same size. Returns the number of hook rounds.
 template <int D>

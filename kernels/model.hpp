@@ -1,7 +1,7 @@
 #pragma once
 // Device data of a run: nodes, elements and interfaces as structures of arrays in Kokkos Views,
 // specialised on the dimension D (2: triangles and 4-node interfaces; 3: tetrahedra and 6-node
-// interfaces) so that a 2D run does no 3D work. Built once on the host (src/solver/simulation.cpp);
+// interfaces) so that a 2D run does no 3D work. Built once on the host (src/solver/model_builder.cpp);
 // during a run nothing moves between host and device except output.
 #include "kernels/cohesive.hpp"
 #include "kernels/fdem_kokkos.hpp"
@@ -27,9 +27,11 @@ struct PlatenSet {
   int count = 0;
   PlatenDev p[kMaxPlatens];
 };
-// Per-platen accumulators (device): force on the body this step (0..2), cumulative work done by
-// the platen (3), cumulative friction dissipation (4), contacts this step (5).
+// Per-platen accumulators (device), the columns of Model::platen_acc: force on the body this step
+// (kPlatenForce + 0..2), cumulative work done by the platen, cumulative friction dissipation,
+// contacts this step.
 constexpr int kPlatenAcc = 8;
+constexpr int kPlatenForce = 0, kPlatenWork = 3, kPlatenFriction = 4, kPlatenContacts = 5;
 
 template <int D>
 struct Model {
@@ -63,13 +65,13 @@ struct Model {
   Kokkos::View<int*> ichunk;
   CohesiveParams coh{};
   // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
-  // to contact when failed and parted (interface_parted, kernels/step.hpp), or, without contact,
+  // to contact when failed and parted (interface_parted, kernels/interface.hpp), or, without contact,
   // come apart (interface_apart). With contact (contact_handover), the force kernel
   // sets icontact_pending when it meets a failed, parted interface not handed over yet.
   Kokkos::View<int*> icontact;
   Kokkos::View<int> icontact_pending;
   bool contact_handover = false;
-  double handover_slip = 0;  // see interface_parted (kernels/step.hpp)
+  double handover_slip = 0;  // see interface_parted (kernels/interface.hpp)
 
   // Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
   // surface node, including the faces of cracks handed over to contact during the run (the

@@ -336,7 +336,7 @@ TEST(Impact, PartedFailedInterfaceCarriesNothing) {
     fB[0] = fB[1] = 0;
     for (int i = 4; i < 8; ++i)
       for (int k = 0; k < 2; ++k) fB[k] += f(i, k);  // total force on the right block
-    stored = interface_state<2>(sim.m).v[0];
+    stored = interface_state<2>(sim.m).elastic;
   };
   Kokkos::deep_copy(x, sim.m.X);
   for (int i = 4; i < 8; ++i) x(i, 0) -= 1e-6;  // right block pressed 1 um into the left one

@@ -7,34 +7,6 @@ std::string FragmentStats::bin_name(int b) {
   return "1e-" + std::to_string(b + 1);
 }
 
-namespace {
-
-// used(i) = 1 for every node of an element (orphan nodes of a mesh file are no fragment).
-template <int D>
-void mark_used(const Model<D>& m, const Kokkos::View<int*>& used) {
-  auto elem = m.elem;
-  auto U = used;
-  Kokkos::deep_copy(U, 0);
-  Kokkos::parallel_for(
-      "fdem::fragments::used", Kokkos::RangePolicy<ExecSpace>(0, m.ne), KOKKOS_LAMBDA(const int e) {
-        for (int a = 0; a < D + 1; ++a) Kokkos::atomic_fetch_or(&U(elem(e, a)), 1);
-      });
-}
-
-// Element mass rho V0.
-template <int D>
-void element_masses(const Model<D>& m, const Kokkos::View<double*>& out) {
-  auto vol0 = m.vol0;
-  auto emat = m.emat;
-  auto mat = m.mat;
-  auto M = out;
-  Kokkos::parallel_for(
-      "fdem::fragments::emass", Kokkos::RangePolicy<ExecSpace>(0, m.ne),
-      KOKKOS_LAMBDA(const int e) { M(e) = mat(emat(e), 2) * vol0(e); });
-}
-
-}  // namespace
-
 template <int D>
 FragmentAnalysis<D>::FragmentAnalysis(const Model<D>& m)
     : par_("fdem::fragments::par", m.nn),

@@ -1,6 +1,7 @@
 #pragma once
 // One run's state on the device and the explicit time loop's building blocks. Templated on the
-// dimension (2, 3) and instantiated for both in simulation.cpp.
+// dimension (2, 3) and instantiated for both: the constructor in model_builder.cpp (one build
+// step per module, solver/model_builder.hpp), the rest in simulation.cpp.
 #include <array>
 #include <memory>
 #include <string>
@@ -8,10 +9,15 @@
 
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
-#include "mesh/mesh.hpp"
+#include "kernels/checks.hpp"
+#include "kernels/forces.hpp"
 #include "kernels/model.hpp"
+#include "kernels/nodes.hpp"
+#include "kernels/outputs.hpp"
+#include "kernels/platens.hpp"
+#include "mesh/mesh.hpp"
 #include "solver/contact_system.hpp"
-#include "kernels/step.hpp"
+#include "solver/stable_step.hpp"
 
 namespace fdem {
 
@@ -32,19 +38,6 @@ struct Energies {
 constexpr int kEnergyFieldCount = 14;
 std::vector<double> energies_to_vector(const Energies& e);
 Energies energies_from_vector(const std::vector<double>& v);
-
-struct StableStep {
-  double bulk = 0;       // min over elements of altitude / P-wave speed
-  double springs = 0;    // min over interface pairs and platen springs of 2 / omega (in force now)
-  double critical = 0;   // combined estimate (1/bulk^2 + 1/springs^2)^(-1/2) (in force now)
-  int bulk_element = -1;
-  // With contact: the springs' and the combined estimate once surfaces can meet (contact springs
-  // and the platens on crack faces counted). They apply from the step on which the first surfaces
-  // can meet (a second body from the start, or the first failed interface): until then the step
-  // is not shortened by springs that do not act (contact_pending).
-  double springs_contact = 0, critical_contact = 0;
-  bool contact_pending = false;
-};
 
 // Wall time of each phase of step(), summed over the steps so far (s). The kernels of a phase are
 // fenced before its clock stops, so on a GPU backend the figures are the phases' own times.
@@ -124,10 +117,6 @@ class Simulation {
   ContactSystem<D>* contact() { return contact_.get(); }
   // The force kernel's scatter view (benchmarks: contact updates timed on their own add into it).
   ForceScatter<D>& force_scatter() { return scatter_; }
-  // With contact: the platens act on the contact system's surface nodes with their areas
-  // (called when the surfaces change; public only because CUDA lambdas may not sit in private
-  // member functions).
-  void sync_platen_nodes();
   // Changes the damping from the next step on (e.g. settle quasi-statically, then run dynamically).
   void set_damping(double local, double mass_proportional) {
     prm_.alpha = local;
@@ -167,10 +156,22 @@ class Simulation {
   double dtv_next_ = 0;  // velocity step of the next node update when dt has just changed
   long dt_changed_at_ = -1;
   double dt_before_change_ = 0;
-  double dt_cap_ = 0, safety_ = 1;  // the case's time.dt (0: none) and safety factor
-  double contact_step(double dt_now) const;  // dt once surfaces can meet, from the present dt
+  StepContributions step_sources_;  // what the stable step is decided from (solver/stable_step.hpp)
   void take_contact_step();   // dt and the stable-step estimates become those with contact
   void apply_contact_step();  // the same during a run (the velocity step of the change)
+  // With contact: the platens act on the contact system's surface nodes with their areas (called
+  // when the surfaces change).
+  void sync_platen_nodes();
+  // The ledger of step(): reactions of the velocity BCs from this step's forces; the energies
+  // stored at time t (sample: else only time and step); after the node update, the works and the
+  // balance (sample) and the work accumulators.
+  void sample_reactions();
+  Energies sample_energies(bool sample);
+  void book_energies(Energies& e, const NodeSums& w, bool sample);
+  // The checkpoint entries under "simulation/" and "model/", one list walked by save_state
+  // (StateSaver) and load_state (StateLoader) (solver/state_fields.hpp).
+  template <class Fields>
+  void checkpoint_fields(Fields& f);
   double gravity_[3] = {0, 0, 0};
   double work_damping_ = 0, work_bc_ = 0;
   double reference_ = 0;  // energy minus external work at the reference step

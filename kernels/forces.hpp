@@ -1,0 +1,130 @@
+#pragma once
+// The internal forces of one explicit step (docs/theory.md sections 2 to 4): bulk elements
+// (kernels/elastic.hpp) and cohesive interfaces (kernels/interface.hpp) in one fused pass that
+// scatters into the nodal forces.
+#include "kernels/cohesive.hpp"
+#include "kernels/elastic.hpp"
+#include "kernels/interface.hpp"
+#include "kernels/model.hpp"
+
+namespace fdem {
+
+// Chunk of items per work item for the scatter: 256 on host backends (one access() per chunk),
+// 1 on GPUs (one thread per item, atomics).
+constexpr int kChunk =
+    Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? kScatterChunk : 1;
+
+// Work item c of the force pass. fused (host backends): element chunk c and the interfaces whose
+// side A lies in it (Model::ichunk: one pass over the nodes, side A's positions and forces are
+// still in cache); else bulk chunks (c < nbc), then interface chunks.
+template <int D>
+struct ForceKernel {
+  Kokkos::View<double* [D]> x;
+  Kokkos::View<int* [D + 1]> elem;
+  Kokkos::View<double* [D][D]> grad;
+  Kokkos::View<double*> vol0;
+  Kokkos::View<int*> emat;
+  Kokkos::View<double* [3]> mat;
+  Kokkos::View<int* [2 * D]> iface;
+  Kokkos::View<double* [D][4]> ihist;
+  Kokkos::View<double*> iarea;
+  CohesiveParams coh;
+  Kokkos::View<int*> icontact;
+  Kokkos::View<int> pending;
+  bool handover;
+  double handover_slip;
+  Kokkos::View<int*> ichunk;
+  ForceScatter<D> sf;
+  int ne, ni, nbc;
+  bool fused;
+
+  // Bulk element e.
+  template <class Acc>
+  KOKKOS_INLINE_FUNCTION void bulk(const int e, Acc& acc) const {
+    double xe[D + 1][D], G[D][D], fe[D + 1][D];
+    for (int a = 0; a < D + 1; ++a)
+      for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
+    for (int b = 0; b < D; ++b)
+      for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+    const int mt = emat(e);
+    element_forces<D>(xe, G, vol0(e), mat(mt, 0), mat(mt, 1), fe);
+    for (int a = 0; a < D + 1; ++a)
+      for (int i = 0; i < D; ++i) acc(elem(e, a), i) += fe[a][i];
+  }
+
+  // Interface q: its history and, while it carries, its forces.
+  template <class Acc>
+  KOKKOS_INLINE_FUNCTION void interface(const int q, Acc& acc) const {
+    if (handover && icontact(q)) return;  // failed: its faces are in contact instead
+    double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
+    CohesivePoint h[D];
+    for (int k = 0; k < D; ++k) {
+      for (int i = 0; i < D; ++i) {
+        xa[k][i] = x(iface(q, k), i);
+        xb[k][i] = x(iface(q, D + k), i);
+      }
+      h[k] = load_point(ihist, q, k);
+    }
+    // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
+    // without contact, come apart for good: interface_apart).
+    if (icontact(q)) return;
+    if (interface_apart<D>(xa, xb, h)) {
+      interface_fail_all<D>(xa, xb, iarea(q), coh, h);
+      for (int k = 0; k < D; ++k) {
+        store_point(ihist, q, k, h[k]);
+      }
+      if (handover) Kokkos::atomic_exchange(&pending(), 1);
+      else icontact(q) = 1;
+      return;
+    }
+    const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
+    if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
+      Kokkos::atomic_exchange(&pending(), 1);
+    for (int k = 0; k < D; ++k) {
+      store_point(ihist, q, k, h[k]);
+      for (int i = 0; i < D; ++i) {
+        acc(iface(q, k), i) += fa[k][i];
+        acc(iface(q, D + k), i) += fb[k][i];
+      }
+    }
+  }
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
+    auto acc = sf.access();
+    if (fused) {
+      const int e1 = kmin((c + 1) * kChunk, ne);
+      for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
+      for (int q = ichunk(c); q < ichunk(c + 1); ++q) interface(q, acc);
+    } else if (c < nbc) {
+      const int e1 = kmin((c + 1) * kChunk, ne);
+      for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
+    } else {
+      const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
+      for (int q = i0; q < i1; ++q) interface(q, acc);
+    }
+  }
+};
+
+// Internal forces of bulk elements and interfaces, fused in one kernel and scattered into m.f
+// (which the node update left at zero). contribute = false: the sums stay in sf (the caller adds
+// the contact forces to it and contributes).
+// Work items: on host backends each chunk of kChunk elements with the interfaces whose side A
+// lies in it (Model::ichunk: one pass over the nodes), else bulk chunks, then interface chunks.
+template <int D>
+void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = true) {
+  const int ne = m.ne, ni = m.ni;
+  const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
+  const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
+  sf.reset();
+  const ForceKernel<D> kernel{m.x,     m.elem,  m.grad,     m.vol0,  m.emat,
+                              m.mat,   m.iface, m.ihist,    m.iarea, m.coh,
+                              m.icontact, m.icontact_pending, m.contact_handover, m.handover_slip,
+                              m.ichunk, sf,     ne,          ni,      nbc,
+                              fused};
+  Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, fused ? nbc : nbc + nic), kernel);
+  if (!contribute) return;  // the caller adds more (contact) and contributes
+  auto f = m.f;
+  Kokkos::Experimental::contribute(f, sf);
+}
+
+}  // namespace fdem

@@ -1,0 +1,208 @@
+#pragma once
+// Kinematics and forces of one cohesive interface element (docs/theory.md sections 4 and 6b):
+// its frame (normal and tributary area), whether it has come apart or parted (handover to
+// contact), the failure of all its points, and its cohesive forces. Pointwise device functions;
+// the force kernel (kernels/forces.hpp) and the contact handover call them.
+#include "kernels/cohesive.hpp"
+#include "kernels/fdem_kokkos.hpp"
+
+namespace fdem {
+
+// Geometry of an interface: unit normal n (from side A to side B) of the mid-surface and the
+// tributary area of each integration point (nodal integration: one point per node pair) in the
+// current configuration. The forces use the reference area (tractions per unit reference area,
+// so that they derive from a stored energy); the current one serves the set-up.
+template <int D>
+KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
+                                            double thickness, double (&n)[D], double& area_pt) {
+  double m[D][D];
+  for (int k = 0; k < D; ++k)
+    for (int i = 0; i < D; ++i) m[k][i] = 0.5 * (xa[k][i] + xb[k][i]);
+  if constexpr (D == 2) {
+    const double tx = m[1][0] - m[0][0], ty = m[1][1] - m[0][1];
+    const double L = kmath::sqrt(tx * tx + ty * ty);
+    n[0] = ty / L;
+    n[1] = -tx / L;
+    area_pt = 0.5 * L * thickness;
+  } else {
+    const double a[3] = {m[1][0] - m[0][0], m[1][1] - m[0][1], m[1][2] - m[0][2]};
+    const double b[3] = {m[2][0] - m[0][0], m[2][1] - m[0][1], m[2][2] - m[0][2]};
+    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double len = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int i = 0; i < D; ++i) n[i] = c[i] / len;
+    area_pt = 0.5 * len / 3.0;
+  }
+}
+
+// An interface has come apart when one of its failed points (D = 1) has its node pair farther
+// apart than the A face's inradius (2D: half its length). Its mid-surface, and so the normal of
+// its compressive penalty and of whatever cohesion its other points still have, is then no
+// longer meaningful (it degenerates when one fragment has turned over against the other, and a
+// penalty along a flipped normal pushes with the force of a millimetre-deep overlap: in the 3D
+// multi-particle impact an interface whose one corner still held while the other two were 8 mm
+// apart kicked a node to 3.5e4 m/s). From the step this is first seen on, every point of the
+// interface is failed (interface_fail_all) and it carries nothing and stores nothing: without
+// contact (case key contact.enabled = false) for good (Model::icontact; switching back on would
+// release whatever overlap its faces reached meanwhile), with contact until the next handover
+// check makes its faces contact surfaces. Faces that stay close (sliding or pressed together)
+// keep the penalty; with contact, interface_parted below hands them over.
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
+                                            const CohesivePoint (&h)[D]) {
+  bool failed = false;
+  for (int k = 0; k < D; ++k) failed = failed || cohesive_damage(h[k]) >= 1.0;
+  if (!failed) return false;
+  double r2;
+  if constexpr (D == 2) {
+    const double tx = xa[1][0] - xa[0][0], ty = xa[1][1] - xa[0][1];
+    r2 = 0.25 * (tx * tx + ty * ty);
+  } else {
+    double e[3][3], per = 0;
+    for (int k = 0; k < 3; ++k) {
+      double l2 = 0;
+      for (int i = 0; i < 3; ++i) {
+        e[k][i] = xa[(k + 1) % 3][i] - xa[k][i];
+        l2 += e[k][i] * e[k][i];
+      }
+      per += kmath::sqrt(l2);
+    }
+    const double c[3] = {e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                         e[0][0] * e[1][1] - e[0][1] * e[1][0]};
+    const double r = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / per;  // 2 area / perimeter
+    r2 = r * r;
+  }
+  for (int k = 0; k < D; ++k) {
+    if (cohesive_damage(h[k]) < 1.0) continue;
+    double d2 = 0;
+    for (int i = 0; i < D; ++i) d2 += (xb[k][i] - xa[k][i]) * (xb[k][i] - xa[k][i]);
+    if (d2 > r2) return true;
+  }
+  return false;
+}
+
+// Fails every point of an interface that has come apart (interface_apart): a point that still
+// holds releases the elastic energy it stores at its present separation, booked as fracture
+// dissipation (its remaining fracture energy is never spent: the crack has run past it).
+template <int D>
+KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const double (&xb)[D][D], double ap,
+                                               const CohesiveParams& p, CohesivePoint (&h)[D]) {
+  double n[D], ap_cur;
+  interface_frame<D>(xa, xb, 1.0, n, ap_cur);
+  for (int k = 0; k < D; ++k) {
+    const double dmg = cohesive_damage(h[k]);
+    if (dmg >= 1.0) continue;
+    double d[D], dn = 0, ds2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+    }
+    for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
+    h[k].wd += ap * cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);
+    if (!(h[k].dm0 > 0.0)) h[k].dm0 = 1e-300;  // never initiated: initiated now
+    if (!(h[k].dmf > h[k].dm0)) h[k].dmf = 2.0 * h[k].dm0;
+    h[k].dmax = h[k].dmax > h[k].dmf ? h[k].dmax : h[k].dmf;
+  }
+}
+
+// A failed interface is handed over to contact once its faces have parted: open (normal gap >= 0
+// at every point), or slid by more than `slip` at some point. Until then the failed interface
+// keeps its compression penalty (the cohesive law at D = 1), which holds the crack faces apart
+// exactly where contact between them could not yet be trusted (faces still touching at a crack
+// tip, copies of a vertex still joined through other interfaces).
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const double (&xb)[D][D], double slip) {
+  double n[D], ap;
+  interface_frame<D>(xa, xb, 1.0, n, ap);
+  bool open = true, slid = false;
+  for (int k = 0; k < D; ++k) {
+    double d[D], dn = 0, d2 = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+      d2 += d[i] * d[i];
+    }
+    open = open && dn >= 0.0;
+    slid = slid || d2 - dn * dn > slip * slip;
+  }
+  return open || slid;
+}
+
+// Cohesive forces of one interface: updates the history of its points and returns the forces on
+// its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
+// point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
+// |delta_k - (delta_k . n) n|) at fixed damage, including the change of the normal n with the
+// nodes (it matters once faces have slid or opened far), so that the interface neither creates
+// nor loses energy.
+template <int D>
+KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
+                                               double ap, const CohesiveParams& p,
+                                               CohesivePoint (&h)[D], double (&fa)[D][D],
+                                               double (&fb)[D][D]) {
+  double n[D], ap_cur;
+  interface_frame<D>(xa, xb, 1.0, n, ap_cur);
+  double dsum = 0;
+  double g[D];  // dU/dn
+  for (int i = 0; i < D; ++i) g[i] = 0;
+  for (int k = 0; k < D; ++k) {
+    double d[D], ds[D], dn = 0;
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+    }
+    double ds2 = 0;
+    for (int i = 0; i < D; ++i) {
+      ds[i] = d[i] - dn * n[i];
+      ds2 += ds[i] * ds[i];
+    }
+    double tn, kss, dmg;
+    cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
+    dsum += dmg;
+    for (int i = 0; i < D; ++i) {
+      fa[k][i] = ap * (tn * n[i] + kss * ds[i]);
+      fb[k][i] = -fa[k][i];
+      g[i] += ap * (tn - kss * dn) * d[i];
+    }
+  }
+  // dU/dn -> forces through the mid-surface points m_k = (xa_k + xb_k) / 2.
+  double gp[D], gn = 0;  // projection (I - n n^T) g
+  for (int i = 0; i < D; ++i) gn += g[i] * n[i];
+  for (int i = 0; i < D; ++i) gp[i] = g[i] - gn * n[i];
+  double dm[D][D];  // dU/dm_k
+  if constexpr (D == 2) {
+    // n = (t_y, -t_x) / L with t = m1 - m0: dU/dt = (1/L) R^T gp, R^T (gx, gy) = (-gy, gx)
+    const double tx = 0.5 * (xa[1][0] + xb[1][0] - xa[0][0] - xb[0][0]);
+    const double ty = 0.5 * (xa[1][1] + xb[1][1] - xa[0][1] - xb[0][1]);
+    const double L = kmath::sqrt(tx * tx + ty * ty);
+    const double Gt[2] = {-gp[1] / L, gp[0] / L};
+    for (int i = 0; i < 2; ++i) {
+      dm[1][i] = Gt[i];
+      dm[0][i] = -Gt[i];
+    }
+  } else {
+    // n = c / |c|, c = a x b, a = m1 - m0, b = m2 - m0: dU/dc = gp / |c|,
+    // dU/da = b x hc, dU/db = hc x a
+    double a[3], b[3];
+    for (int i = 0; i < 3; ++i) {
+      a[i] = 0.5 * (xa[1][i] + xb[1][i] - xa[0][i] - xb[0][i]);
+      b[i] = 0.5 * (xa[2][i] + xb[2][i] - xa[0][i] - xb[0][i]);
+    }
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double cl = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const double hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
+    const double da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
+    const double db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
+    for (int i = 0; i < 3; ++i) {
+      dm[1][i] = da[i];
+      dm[2][i] = db[i];
+      dm[0][i] = -da[i] - db[i];
+    }
+  }
+  for (int k = 0; k < D; ++k)
+    for (int i = 0; i < D; ++i) {
+      fa[k][i] -= 0.5 * dm[k][i];
+      fb[k][i] -= 0.5 * dm[k][i];
+    }
+  return dsum / D;
+}
+
+}  // namespace fdem

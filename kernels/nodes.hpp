@@ -1,0 +1,138 @@
+#pragma once
+// The node update of one explicit step (docs/theory.md section 2): central differences
+// (leap-frog) with local and mass-proportional damping and velocity boundary conditions, and the
+// sums the energy ledger needs (docs/theory.md section 7).
+#include "kernels/model.hpp"
+
+namespace fdem {
+
+struct NodeUpdateParams {
+  double gravity[3];
+  double alpha;      // local non-viscous damping
+  double cmass;      // mass-proportional damping (1/s)
+  double t, dt;      // time of the current positions, step to the next positions
+  // Velocity step: the time between v(n-1/2) and v(n+1/2), (dt_old + dt) / 2; = dt except on the
+  // step where dt changes (Simulation: contact's stable step applies once surfaces can meet).
+  double dtv;
+  bool has_fext;
+};
+
+// Sums of one node update: energy dissipated by damping and work of the velocity BCs over this
+// step (accumulated every step); on sampled steps also the kinetic energy 0.5 m v(n-1/2).v(n+1/2)
+// (the leap-frog's conserved form), the work of gravity and of the point loads at x(n), and the
+// linear momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (components beyond D stay 0).
+// A parallel_reduce result type in Kokkos 3.4.1 (volatile join) and 4.x (plain join).
+struct NodeSums {
+  double damping = 0, bc_work = 0;
+  double kinetic = 0, gravity_work = 0, load_work = 0;
+  double momentum[3] = {0, 0, 0};
+  KOKKOS_INLINE_FUNCTION NodeSums() {}
+  KOKKOS_INLINE_FUNCTION NodeSums& operator+=(const NodeSums& o) {
+    damping += o.damping;
+    bc_work += o.bc_work;
+    kinetic += o.kinetic;
+    gravity_work += o.gravity_work;
+    load_work += o.load_work;
+    for (int k = 0; k < 3; ++k) momentum[k] += o.momentum[k];
+    return *this;
+  }
+#if KOKKOS_VERSION < 40000
+  KOKKOS_INLINE_FUNCTION void operator+=(const volatile NodeSums& o) volatile {
+    damping += o.damping;
+    bc_work += o.bc_work;
+    kinetic += o.kinetic;
+    gravity_work += o.gravity_work;
+    load_work += o.load_work;
+    for (int k = 0; k < 3; ++k) momentum[k] += o.momentum[k];
+  }
+#endif
+};
+
+// Central-difference update of one node with damping and velocity BCs; zeroes its force for the
+// next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
+// the kinetic-energy change of a node exactly the work of the forces on it.
+// Damp = false: the scene has no damping (alpha = c = 0): no damping force, no damping work (the
+// results are the same as with Damp = true at zero damping).
+template <int D, bool Sample, bool Damp>
+struct NodeUpdate {
+  Kokkos::View<double* [D]> x, X, v, f, fext;
+  Kokkos::View<double*> mass;
+  Kokkos::View<int*> node_bc;
+  Kokkos::View<BCDev*> bcs;
+  NodeUpdateParams p;
+  double th;  // velocities live at half steps
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, NodeSums& s) const {
+    const double mi = mass(i);
+    const int bc = node_bc(i);
+    for (int k = 0; k < D; ++k) {
+      double F = f(i, k) + mi * p.gravity[k];
+      const double fe = p.has_fext ? fext(i, k) : 0.0;
+      F += fe;
+      const double vo = v(i, k);
+      double vn;
+      if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
+        const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
+        vn = bcs(bc).vel[k] * r;
+        s.bc_work += (mi * (vn - vo) / p.dtv - F) * 0.5 * (vo + vn) * p.dtv;
+      } else if (Damp) {
+        double fd = -p.cmass * mi * vo;
+        if (p.alpha > 0) {
+          const double fu = F + fd;
+          fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
+        }
+        vn = vo + p.dtv * (F + fd) / mi;
+        s.damping -= fd * 0.5 * (vo + vn) * p.dtv;
+      } else {
+        vn = vo + p.dtv * F / mi;
+      }
+      if (Sample) {
+        const double u = x(i, k) - X(i, k);
+        s.kinetic += 0.5 * mi * vo * vn;
+        s.gravity_work += mi * p.gravity[k] * u;
+        s.load_work += fe * u;
+        s.momentum[k] += 0.5 * mi * (vo + vn);
+      }
+      v(i, k) = vn;
+      x(i, k) += p.dt * vn;
+      f(i, k) = 0.0;
+    }
+  }
+};
+
+// The same without sums (an unsampled step of a scene without damping and velocity BCs).
+template <class Update>
+struct NodeUpdateNoSums {
+  Update u;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    NodeSums s;
+    u(i, s);
+  }
+};
+
+// Update of all nodes. The sums are reduced only when there is something to sum: on sampled
+// steps, or when the scene has damping or velocity BCs (their work is accumulated every step);
+// otherwise the pass is a plain parallel_for.
+template <int D, bool Sample, bool Damp>
+NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
+  const NodeUpdate<D, Sample, Damp> fn{m.x, m.X, m.v, m.f, m.fext, m.mass, m.node_bc, m.bcs, prm,
+                                       prm.t + 0.5 * prm.dt};
+  NodeSums out;
+  const bool reduce = Sample || Damp || m.bcs.extent(0) > 0;
+  if (reduce) {
+    Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, out);
+  } else {
+    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp>>{fn});
+  }
+  return out;
+}
+
+}  // namespace fdem
+
+namespace Kokkos {
+template <>
+struct reduction_identity<fdem::NodeSums> {
+  KOKKOS_FORCEINLINE_FUNCTION static fdem::NodeSums sum() { return fdem::NodeSums(); }
+};
+}  // namespace Kokkos

@@ -1,0 +1,312 @@
+#include "solver/model_builder.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "common/error.hpp"
+#include "kernels/interface.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+namespace {
+
+template <int D>
+double det(const double (&A)[D][D]) {
+  if constexpr (D == 2) {
+    return A[0][0] * A[1][1] - A[0][1] * A[1][0];
+  } else {
+    return A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+           A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+           A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+  }
+}
+
+template <int D>
+void inverse(const double (&A)[D][D], double (&B)[D][D]) {
+  const double d = det<D>(A);
+  if constexpr (D == 2) {
+    B[0][0] = A[1][1] / d; B[0][1] = -A[0][1] / d;
+    B[1][0] = -A[1][0] / d; B[1][1] = A[0][0] / d;
+  } else {
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+        B[i][j] = (A[i1][j1] * A[i2][j2] - A[i1][j2] * A[i2][j1]) / d;
+      }
+  }
+}
+
+// Largest face measure of a simplex (2D: longest edge; 3D: largest face area).
+template <int D>
+double largest_face(const double (&x)[D + 1][D]) {
+  double best = 0;
+  for (int skip = 0; skip < D + 1; ++skip) {
+    int idx[D], c = 0;
+    for (int a = 0; a < D + 1; ++a)
+      if (a != skip) idx[c++] = a;
+    double meas;
+    if constexpr (D == 2) {
+      meas = std::hypot(x[idx[1]][0] - x[idx[0]][0], x[idx[1]][1] - x[idx[0]][1]);
+    } else {
+      double a[3], b[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = x[idx[1]][k] - x[idx[0]][k];
+        b[k] = x[idx[2]][k] - x[idx[0]][k];
+      }
+      meas = triangle_area(a, b);
+    }
+    best = std::max(best, meas);
+  }
+  return best;
+}
+
+template <class V>
+auto mirror(const V& v) {
+  return Kokkos::create_mirror_view(v);
+}
+
+}  // namespace
+
+template <int D>
+MaterialTable build_materials(const Case& c, const HostMesh& mesh, Model<D>& m) {
+  const int nmat = static_cast<int>(c.materials.size());
+  m.mat = Kokkos::View<double* [3]>("fdem::mat", nmat);
+  auto mat_h = mirror(m.mat);
+  MaterialTable t;
+  t.cp.resize(nmat);
+  t.rho.resize(nmat);
+  for (int k = 0; k < nmat; ++k) {
+    const auto& bm = c.materials[k];
+    double lam = bm.E * bm.nu / ((1 + bm.nu) * (1 - 2 * bm.nu));
+    const double mu = bm.E / (2 * (1 + bm.nu));
+    if (m.plane_stress) lam = 2 * lam * mu / (lam + 2 * mu);
+    mat_h(k, 0) = lam;
+    mat_h(k, 1) = mu;
+    mat_h(k, 2) = bm.density;
+    t.rho[k] = bm.density;
+    t.cp[k] = std::sqrt((lam + 2 * mu) / bm.density);
+  }
+  Kokkos::deep_copy(m.mat, mat_h);
+  t.region_mat.assign(mesh.region_names.size(), -1);
+  for (size_t r = 0; r < mesh.region_names.size(); ++r) {
+    auto it = c.region_material.find(mesh.region_names[r]);
+    if (it != c.region_material.end()) {
+      t.region_mat[r] = it->second;
+    } else if (nmat == 1) {
+      t.region_mat[r] = 0;
+    } else {
+      throw InputError(c.file + ": regions: mesh region '" + mesh.region_names[r] + "' has no material");
+    }
+  }
+  return t;
+}
+
+template <int D>
+void build_nodes(const HostMesh& mesh, Model<D>& m) {
+  const int nn = m.nn;
+  m.X = Kokkos::View<double* [D]>("fdem::X", nn);
+  m.x = Kokkos::View<double* [D]>("fdem::x", nn);
+  m.v = Kokkos::View<double* [D]>("fdem::v", nn);
+  m.f = Kokkos::View<double* [D]>("fdem::f", nn);
+  auto X_h = mirror(m.X);
+  for (int i = 0; i < nn; ++i)
+    for (int k = 0; k < D; ++k) X_h(i, k) = mesh.X[static_cast<size_t>(i) * D + k];
+  Kokkos::deep_copy(m.X, X_h);
+  Kokkos::deep_copy(m.x, X_h);
+}
+
+template <int D>
+ElementSetup build_elements(const Case& c, const HostMesh& mesh, const MaterialTable& mats, Model<D>& m) {
+  const int ne = m.ne, nn = m.nn;
+  m.elem = Kokkos::View<int* [D + 1]>("fdem::elem", ne);
+  m.grad = Kokkos::View<double* [D][D]>("fdem::grad", ne);
+  m.vol0 = Kokkos::View<double*>("fdem::vol0", ne);
+  m.emat = Kokkos::View<int*>("fdem::emat", ne);
+  auto elem_h = mirror(m.elem);
+  auto grad_h = mirror(m.grad);
+  auto vol_h = mirror(m.vol0);
+  auto emat_h = mirror(m.emat);
+  ElementSetup out;
+  out.mass.assign(nn, 0.0);
+  double fact = 1;
+  for (int k = 2; k <= D; ++k) fact *= k;
+  out.bulk_step = std::numeric_limits<double>::infinity();
+  for (int e = 0; e < ne; ++e) {
+    double xe[D + 1][D], A[D][D], B[D][D];
+    for (int a = 0; a < D + 1; ++a) {
+      elem_h(e, a) = mesh.elems[static_cast<size_t>(e) * (D + 1) + a];
+      for (int k = 0; k < D; ++k) xe[a][k] = mesh.X[static_cast<size_t>(elem_h(e, a)) * D + k];
+    }
+    for (int i = 0; i < D; ++i)
+      for (int b = 0; b < D; ++b) A[i][b] = xe[b + 1][i] - xe[0][i];
+    const double dA = det<D>(A);
+    if (!(dA > 0)) {
+      std::ostringstream os;
+      os << c.file << ": element " << e << " is inverted or degenerate (signed measure " << dA / fact << ")";
+      throw InputError(os.str());
+    }
+    inverse<D>(A, B);  // rows of B are the gradients of N_1..N_D
+    for (int b = 0; b < D; ++b)
+      for (int j = 0; j < D; ++j) grad_h(e, b, j) = B[b][j];
+    const double meas = dA / fact;
+    vol_h(e) = meas * m.thickness;
+    const int mt = mats.region_mat[mesh.elem_region[e]];
+    emat_h(e) = mt;
+    for (int a = 0; a < D + 1; ++a) out.mass[elem_h(e, a)] += mats.rho[mt] * vol_h(e) / (D + 1);
+    const double h = D * meas / largest_face<D>(xe);  // shortest altitude
+    const double dte = h / mats.cp[mt];
+    if (dte < out.bulk_step) {
+      out.bulk_step = dte;
+      out.bulk_element = e;
+    }
+  }
+  for (int e = 0; e < ne; ++e) out.volume += vol_h(e);
+  Kokkos::deep_copy(m.elem, elem_h);
+  Kokkos::deep_copy(m.grad, grad_h);
+  Kokkos::deep_copy(m.vol0, vol_h);
+  Kokkos::deep_copy(m.emat, emat_h);
+  m.mass = Kokkos::View<double*>("fdem::mass", nn);
+  auto mass_h = mirror(m.mass);
+  for (int i = 0; i < nn; ++i) mass_h(i) = out.mass[i] > 0 ? out.mass[i] : 1.0;  // orphan nodes: inert
+  Kokkos::deep_copy(m.mass, mass_h);
+  return out;
+}
+
+CohesiveParams cohesive_params(const InterfaceMaterial& im) {
+  return CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta};
+}
+
+template <int D>
+double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m) {
+  const int ni = m.ni;
+  double step = std::numeric_limits<double>::infinity();
+  m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
+  m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
+  m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
+  m.icontact = Kokkos::View<int*>("fdem::icontact", ni);
+  if (ni == 0) return step;
+  if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
+  const auto& im = c.interface_materials[c.fracture_material];
+  m.coh = cohesive_params(im);
+  auto if_h = mirror(m.iface);
+  auto ia_h = mirror(m.iarea);
+  const double kmax = std::max(im.kn, im.ks);
+  for (int q = 0; q < ni; ++q) {
+    double xa[D][D], xb[D][D], n[D], ap;
+    for (int k = 0; k < 2 * D; ++k) if_h(q, k) = mesh.ifaces[static_cast<size_t>(q) * 2 * D + k];
+    for (int k = 0; k < D; ++k)
+      for (int i = 0; i < D; ++i) {
+        xa[k][i] = mesh.X[static_cast<size_t>(if_h(q, k)) * D + i];
+        xb[k][i] = xa[k][i];
+      }
+    interface_frame<D>(xa, xb, m.thickness, n, ap);
+    ia_h(q) = ap;
+    for (int k = 0; k < D; ++k) {
+      const double w = std::sqrt(kmax * ap * (1 / mass[if_h(q, k)] + 1 / mass[if_h(q, D + k)]));
+      step = std::min(step, 2.0 / w);
+    }
+  }
+  Kokkos::deep_copy(m.iface, if_h);
+  Kokkos::deep_copy(m.iarea, ia_h);
+  return step;
+}
+
+template <int D>
+void build_interface_chunks(const HostMesh& mesh, Model<D>& m) {
+  const int ni = m.ni, ne = m.ne;
+  if (ni == 0) return;
+  bool ordered = kChunk > 1 && mesh.iface_elems.size() == 2 * static_cast<size_t>(ni);
+  for (int q = 1; ordered && q < ni; ++q) ordered = mesh.iface_elems[2 * q] >= mesh.iface_elems[2 * (q - 1)];
+  if (!ordered) return;
+  const int nbc = (ne + kChunk - 1) / kChunk;
+  m.ichunk = Kokkos::View<int*>("fdem::ichunk", nbc + 1);
+  auto ic_h = mirror(m.ichunk);
+  int q = 0;
+  for (int c = 0; c <= nbc; ++c) {
+    const long e0 = std::min(static_cast<long>(c) * kChunk, static_cast<long>(ne));
+    while (q < ni && mesh.iface_elems[2 * static_cast<size_t>(q)] < e0) ++q;
+    ic_h(c) = c == nbc ? ni : q;
+  }
+  Kokkos::deep_copy(m.ichunk, ic_h);
+}
+
+template <int D>
+Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
+  if (mesh.dim != D) throw InputError(c.file + ": mesh dimension does not match 'dimension'");
+  m.nn = mesh.num_nodes();
+  m.ne = mesh.num_elems();
+  m.ni = mesh.num_ifaces();
+  m.thickness = D == 2 ? c.thickness : 1.0;
+  m.plane_stress = D == 2 && c.plane_stress;
+
+  const MaterialTable mats = build_materials<D>(c, mesh, m);
+  build_nodes<D>(mesh, m);
+  const ElementSetup el = build_elements<D>(c, mesh, mats, m);
+  double emin = std::numeric_limits<double>::infinity();
+  for (const auto& bm : c.materials) emin = std::min(emin, bm.E);
+  energy_floor_ = 0.5 * emin * 1e-12 * el.volume;  // the strain energy at strain 1e-6
+  StepContributions& sc = step_sources_;
+  sc.bulk = el.bulk_step;
+  sc.bulk_element = el.bulk_element;
+
+  sc.interfaces = build_interfaces<D>(c, mesh, el.mass, m);
+  coh0_ = m.coh;
+  build_interface_chunks<D>(mesh, m);
+
+  if (!c.platens.empty()) {
+    build_boundary_areas<D>(mesh, m);
+    sc.platens = build_platens<D>(c, mesh, el.mass, m, platen_names_);
+  }
+  m.platen_acc = Kokkos::View<double* [kPlatenAcc]>("fdem::platen_acc", std::max(1, m.platens.count));
+  platen_acc_host_ = Kokkos::create_mirror_view(m.platen_acc);
+
+  const VelocityBCTable bcs = build_velocity_bcs<D>(c, mesh, m);
+  bc_names_ = bcs.names;
+  bc_nodes_ = bcs.nodes;
+  reactions_.assign(bc_nodes_.size(), {0, 0, 0});
+
+  build_point_loads<D>(c, mesh, m);
+  for (int k = 0; k < 3; ++k) gravity_[k] = c.gravity[k];
+  set_initial_velocities<D>(c, mesh, bcs, m);
+
+  if (contact_wanted(c, mesh)) {
+    contact_ = std::make_unique<ContactSystem<D>>(c, mesh, m, el.mass);
+    mu0_ = contact_->law.mu;
+    sc.has_contact = true;
+    sc.contact = contact_->stable_step();
+    // with contact, the platens act on every surface node, crack faces included: their springs
+    // count with each node's largest possible area
+    sc.platens_on_surfaces = platen_surface_step<D>(m, contact_->potential_area(), el.mass);
+    sync_platen_nodes();
+    sc.may_meet = contact_->may_meet();
+  }
+
+  sc.dt_cap = c.dt;
+  sc.safety = c.safety_factor;
+  const TimeStep ts = decide_stable_step(sc);
+  stable = ts.stable;
+  dt = ts.dt;
+
+  prm_.alpha = c.local_damping;
+  prm_.cmass = c.mass_damping;
+  for (int k = 0; k < 3; ++k) prm_.gravity[k] = c.gravity[k];
+  prm_.has_fext = m.fext.extent(0) > 0;
+  scatter_ = ForceScatter<D>(m.f);
+}
+
+#define FDEM_BUILDERS(D)                                                                                    \
+  template MaterialTable build_materials<D>(const Case&, const HostMesh&, Model<D>&);                      \
+  template void build_nodes<D>(const HostMesh&, Model<D>&);                                                \
+  template ElementSetup build_elements<D>(const Case&, const HostMesh&, const MaterialTable&, Model<D>&);   \
+  template double build_interfaces<D>(const Case&, const HostMesh&, const std::vector<double>&, Model<D>&); \
+  template void build_interface_chunks<D>(const HostMesh&, Model<D>&);                                     \
+  template Simulation<D>::Simulation(const Case&, const HostMesh&);
+FDEM_BUILDERS(2)
+FDEM_BUILDERS(3)
+#undef FDEM_BUILDERS
+
+}  // namespace fdem

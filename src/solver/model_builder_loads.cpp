@@ -1,0 +1,244 @@
+// Building the model, continued (solver/model_builder.hpp): the outer boundary and the platens,
+// the velocity-BC table, point loads and initial velocities.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "common/error.hpp"
+#include "solver/model_builder.hpp"
+
+namespace fdem {
+
+namespace {
+
+template <class V>
+auto mirror(const V& v) {
+  return Kokkos::create_mirror_view(v);
+}
+
+}  // namespace
+
+template <int D>
+void build_boundary_areas(const HostMesh& mesh, Model<D>& m) {
+  const auto faces = boundary_faces(mesh);
+  std::map<int, double> area;
+  const int nf = static_cast<int>(faces.size()) / D;
+  for (int fi = 0; fi < nf; ++fi) {
+    double meas;
+    const double* p0 = &mesh.X[static_cast<size_t>(faces[fi * D]) * D];
+    const double* p1 = &mesh.X[static_cast<size_t>(faces[fi * D + 1]) * D];
+    if constexpr (D == 2) {
+      meas = std::hypot(p1[0] - p0[0], p1[1] - p0[1]) * m.thickness;
+    } else {
+      const double* p2 = &mesh.X[static_cast<size_t>(faces[fi * D + 2]) * D];
+      double a[3], b[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = p1[k] - p0[k];
+        b[k] = p2[k] - p0[k];
+      }
+      meas = triangle_area(a, b);
+    }
+    for (int k = 0; k < D; ++k) area[faces[fi * D + k]] += meas / D;
+  }
+  m.nb = static_cast<int>(area.size());
+  m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
+  m.barea = Kokkos::View<double*>("fdem::barea", m.nn);
+  auto bn_h = mirror(m.bnode);
+  auto ba_h = mirror(m.barea);
+  int b = 0;
+  for (const auto& [node, a] : area) {
+    bn_h(b) = node;
+    ba_h(node) = a;
+    ++b;
+  }
+  Kokkos::deep_copy(m.bnode, bn_h);
+  Kokkos::deep_copy(m.barea, ba_h);
+}
+
+namespace {
+
+// Default platen stiffness: the interface stiffness, else 10 E / mean element size.
+void default_platen_stiffness(const Case& c, const HostMesh& mesh, double& kn, double& ks_ratio) {
+  kn = 0;
+  ks_ratio = 0.4;
+  if (c.fracture_material >= 0) {
+    kn = c.interface_materials[c.fracture_material].kn;
+    ks_ratio = c.interface_materials[c.fracture_material].ks / kn;
+    return;
+  }
+  double emax = 0, nu = 0.25;
+  for (const auto& bm : c.materials)
+    if (bm.E > emax) { emax = bm.E; nu = bm.nu; }
+  const auto q = mesh_quality(mesh);
+  kn = 10 * emax / q.mean_size;
+  ks_ratio = 1.0 / (2 * (1 + nu));
+}
+
+}  // namespace
+
+template <int D>
+double build_platens(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
+                     std::vector<std::string>& names) {
+  if (static_cast<int>(c.platens.size()) > kMaxPlatens)
+    throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
+  double kn_default, ks_ratio;
+  default_platen_stiffness(c, mesh, kn_default, ks_ratio);
+  auto bn_h = mirror(m.bnode);
+  auto ba_h = mirror(m.barea);
+  Kokkos::deep_copy(bn_h, m.bnode);
+  Kokkos::deep_copy(ba_h, m.barea);
+  double step = std::numeric_limits<double>::infinity();
+  m.platens.count = static_cast<int>(c.platens.size());
+  for (int p = 0; p < m.platens.count; ++p) {
+    const auto& ps = c.platens[p];
+    PlatenDev& P = m.platens.p[p];
+    double nlen = 0;
+    for (int k = 0; k < 3; ++k) nlen += ps.normal[k] * ps.normal[k];
+    nlen = std::sqrt(nlen);
+    for (int k = 0; k < 3; ++k) {
+      P.p0[k] = ps.point[k];
+      P.n[k] = ps.normal[k] / nlen;
+      P.vel[k] = ps.velocity[k];
+    }
+    P.kn = ps.kn > 0 ? ps.kn : kn_default;
+    P.ks = ps.ks > 0 ? ps.ks : P.kn * ks_ratio;
+    P.mu = ps.friction;
+    P.coh = ps.cohesion;
+    names.push_back(ps.name);
+    for (int bb = 0; bb < m.nb; ++bb) {
+      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) / mass[bn_h(bb)]);
+      step = std::min(step, 2.0 / w);
+    }
+  }
+  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
+  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
+  return step;
+}
+
+template <int D>
+double platen_surface_step(const Model<D>& m, const std::vector<double>& amax,
+                           const std::vector<double>& mass) {
+  double step = std::numeric_limits<double>::infinity();
+  for (int p = 0; p < m.platens.count; ++p) {
+    const PlatenDev& P = m.platens.p[p];
+    for (int i = 0; i < m.nn; ++i)
+      if (amax[i] > 0 && mass[i] > 0)
+        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
+  }
+  return step;
+}
+
+template <int D>
+VelocityBCTable build_velocity_bcs(const Case& c, const HostMesh& mesh, Model<D>& m) {
+  VelocityBCTable t;
+  t.node_bc.assign(m.nn, -1);
+  std::map<std::pair<int, int>, int> merged;
+  for (size_t b = 0; b < c.velocity_bcs.size(); ++b) {
+    const auto& bc = c.velocity_bcs[b];
+    BCDev d{};
+    for (int k = 0; k < D; ++k)
+      if (bc.active[k]) {
+        d.mask |= 1 << k;
+        d.vel[k] = bc.velocity[k];
+      }
+    d.ramp = bc.ramp_time;
+    const int id = static_cast<int>(t.table.size());
+    t.table.push_back(d);
+    t.names.push_back(bc.set);
+    const auto& nodes = mesh.node_sets.at(bc.set);
+    Kokkos::View<int*> nv("fdem::bc_nodes", nodes.size());
+    auto nv_h = mirror(nv);
+    for (size_t j = 0; j < nodes.size(); ++j) {
+      const int i = nodes[j];
+      nv_h(j) = i;
+      if (t.node_bc[i] < 0) {
+        t.node_bc[i] = id;
+        continue;
+      }
+      auto key = std::make_pair(t.node_bc[i], id);
+      auto it = merged.find(key);
+      if (it == merged.end()) {
+        BCDev md = t.table[t.node_bc[i]];
+        md.mask |= d.mask;
+        for (int k = 0; k < D; ++k)
+          if (d.mask >> k & 1) md.vel[k] = d.vel[k];
+        md.ramp = std::max(md.ramp, d.ramp);
+        it = merged.emplace(key, static_cast<int>(t.table.size())).first;
+        t.table.push_back(md);
+      }
+      t.node_bc[i] = it->second;
+    }
+    Kokkos::deep_copy(nv, nv_h);
+    t.nodes.push_back(nv);
+  }
+  m.bcs = Kokkos::View<BCDev*>("fdem::bcs", t.table.size());
+  auto bcs_h = mirror(m.bcs);
+  for (size_t b = 0; b < t.table.size(); ++b) bcs_h(b) = t.table[b];
+  Kokkos::deep_copy(m.bcs, bcs_h);
+  m.node_bc = Kokkos::View<int*>("fdem::node_bc", m.nn);
+  auto nbc_h = mirror(m.node_bc);
+  for (int i = 0; i < m.nn; ++i) nbc_h(i) = t.node_bc[i];
+  Kokkos::deep_copy(m.node_bc, nbc_h);
+  return t;
+}
+
+template <int D>
+void build_point_loads(const Case& c, const HostMesh& mesh, Model<D>& m) {
+  if (c.point_loads.empty()) {
+    m.fext = Kokkos::View<double* [D]>("fdem::fext", 0);
+    return;
+  }
+  m.fext = Kokkos::View<double* [D]>("fdem::fext", m.nn);
+  auto fe_h = mirror(m.fext);
+  for (const auto& pl : c.point_loads) {
+    const auto& nodes = mesh.node_sets.at(pl.set);
+    for (int i : nodes)
+      for (int k = 0; k < D; ++k) fe_h(i, k) += pl.force[k] / static_cast<double>(nodes.size());
+  }
+  Kokkos::deep_copy(m.fext, fe_h);
+}
+
+template <int D>
+void set_initial_velocities(const Case& c, const HostMesh& mesh, const VelocityBCTable& bcs, Model<D>& m) {
+  if (!c.initial_velocities.empty()) {
+    auto v_h = mirror(m.v);
+    for (const auto& iv : c.initial_velocities) {
+      const int r = iv.region == "all" ? -1 : mesh.region_index(iv.region);
+      for (int e = 0; e < m.ne; ++e)
+        if (r < 0 || mesh.elem_region[e] == r)
+          for (int a = 0; a < D + 1; ++a) {
+            const int i = mesh.elems[static_cast<size_t>(e) * (D + 1) + a];
+            for (int k = 0; k < D; ++k) v_h(i, k) = iv.velocity[k];
+          }
+    }
+    Kokkos::deep_copy(m.v, v_h);
+  }
+  // Velocity BCs hold from the start: v(-dt/2) of a constrained component is its prescribed value
+  // (0 for a ramp), so the run does not begin with an impulse.
+  if (bcs.table.empty()) return;
+  auto v_h = mirror(m.v);
+  Kokkos::deep_copy(v_h, m.v);
+  for (int i = 0; i < m.nn; ++i) {
+    if (bcs.node_bc[i] < 0) continue;
+    const BCDev& b = bcs.table[bcs.node_bc[i]];
+    for (int k = 0; k < D; ++k)
+      if (b.mask >> k & 1) v_h(i, k) = b.ramp > 0 ? 0.0 : b.vel[k];
+  }
+  Kokkos::deep_copy(m.v, v_h);
+}
+
+#define FDEM_BUILDERS(D)                                                                                     \
+  template void build_boundary_areas<D>(const HostMesh&, Model<D>&);                                        \
+  template double build_platens<D>(const Case&, const HostMesh&, const std::vector<double>&, Model<D>&,     \
+                                   std::vector<std::string>&);                                              \
+  template double platen_surface_step<D>(const Model<D>&, const std::vector<double>&,                       \
+                                         const std::vector<double>&);                                       \
+  template VelocityBCTable build_velocity_bcs<D>(const Case&, const HostMesh&, Model<D>&);                  \
+  template void build_point_loads<D>(const Case&, const HostMesh&, Model<D>&);                              \
+  template void set_initial_velocities<D>(const Case&, const HostMesh&, const VelocityBCTable&, Model<D>&);
+FDEM_BUILDERS(2)
+FDEM_BUILDERS(3)
+#undef FDEM_BUILDERS
+
+}  // namespace fdem

@@ -1,0 +1,53 @@
+#pragma once
+// The stable time step of a run (docs/theory.md section 7, "Time step and energy error through
+// fracture"): every contribution to it, and the one function that decides the estimates and the
+// step from them.
+#include <limits>
+
+namespace fdem {
+
+struct StableStep {
+  double bulk = 0;       // min over elements of altitude / P-wave speed
+  double springs = 0;    // min over interface pairs and platen springs of 2 / omega (in force now)
+  double critical = 0;   // combined estimate (1/bulk^2 + 1/springs^2)^(-1/2) (in force now)
+  int bulk_element = -1;
+  // With contact: the springs' and the combined estimate once surfaces can meet (contact springs
+  // and the platens on crack faces counted). They apply from the step on which the first surfaces
+  // can meet (a second body from the start, or the first failed interface): until then the step
+  // is not shortened by springs that do not act (contact_pending).
+  double springs_contact = 0, critical_contact = 0;
+  bool contact_pending = false;
+};
+
+// Every contribution to the stable step (s), each the smallest over its items: a bulk element's
+// shortest altitude over its P-wave speed, a spring's 2 / omega (omega^2 = k A / m). Infinite
+// where there is none. Filled while the model is built (src/solver/model_builder.cpp).
+struct StepContributions {
+  static constexpr double kNone = std::numeric_limits<double>::infinity();
+  double bulk = kNone;         // bulk elements
+  int bulk_element = -1;       // the element that sets `bulk`
+  double interfaces = kNone;   // cohesive interface node pairs, at the larger of kn and ks
+  double platens = kNone;      // platen springs on the outer boundary nodes
+  // With contact, once surfaces can meet: the contact springs (ContactSystem::stable_step) and
+  // the platen springs on every potential surface node (crack faces included) at its largest area.
+  double contact = kNone;
+  double platens_on_surfaces = kNone;
+  bool has_contact = false;    // the case has contact
+  bool may_meet = false;       // surfaces can meet from the start (more than one body)
+  double dt_cap = 0;           // the case's time.dt (0: none)
+  double safety = 1;           // the case's time.safety_factor
+};
+
+struct TimeStep {
+  StableStep stable;
+  double dt = 0;
+};
+
+// The stable-step estimates and the time step. contact_now = false: at the start of a run, the
+// step safety * critical capped by time.dt, without the springs that act only once surfaces can
+// meet (contact_pending) while none can yet. contact_now = true: once surfaces can meet, from the
+// present step dt_now: the same fraction of the critical step with contact as before; a case's
+// time.dt stays the limit.
+TimeStep decide_stable_step(const StepContributions& c, bool contact_now = false, double dt_now = 0);
+
+}  // namespace fdem
