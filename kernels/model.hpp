@@ -33,29 +33,36 @@ struct PlatenSet {
 constexpr int kPlatenAcc = 8;
 constexpr int kPlatenForce = 0, kPlatenWork = 3, kPlatenFriction = 4, kPlatenContacts = 5;
 
+// The model's data in four bundles, each a structure of arrays that a kernel can capture by value
+// on its own (`const NodeData<D> n = m;`): nodes, elements, interfaces, and the platens with the
+// boundary nodes they act on. Model<D> is all four.
 template <int D>
-struct Model {
-  static constexpr int dim = D;
-  int nn = 0, ne = 0, ni = 0, nb = 0;
-  double thickness = 1.0;  // 2D: out-of-plane thickness; 3D: 1
-  bool plane_stress = false;
-
-  // nodes
+struct NodeData {
+  int nn = 0;
   Kokkos::View<double* [D]> X, x, v, f;  // reference, current position, velocity, force
   Kokkos::View<double*> mass;
   Kokkos::View<int*> node_bc;      // -1: free; else index into bcs
   Kokkos::View<BCDev*> bcs;
   Kokkos::View<double* [D]> fext;  // constant point loads (extent 0 when there are none)
+};
 
-  // elements
+template <int D>
+struct ElementData {
+  int ne = 0;
+  double thickness = 1.0;  // 2D: out-of-plane thickness; 3D: 1
+  bool plane_stress = false;
   Kokkos::View<int* [D + 1]> elem;
   Kokkos::View<double* [D][D]> grad;  // reference shape-function gradients of nodes 1..D
   Kokkos::View<double*> vol0;         // reference volume (2D: area * thickness)
   Kokkos::View<int*> emat;            // material index
   Kokkos::View<double* [3]> mat;      // per material: lambda (plane-stress corrected), mu, density
+};
 
-  // interfaces: node pairs (A0..A{D-1}, B0..B{D-1}); per integration point (one per node pair)
-  // the history dmax, dm0, dmf, wd (see cohesive.hpp).
+// Interfaces: node pairs (A0..A{D-1}, B0..B{D-1}); per integration point (one per node pair) the
+// history dmax, dm0, dmf, wd (cohesive.hpp; read and written through load_point / store_point).
+template <int D>
+struct InterfaceData {
+  int ni = 0;
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
@@ -65,24 +72,37 @@ struct Model {
   Kokkos::View<int*> ichunk;
   CohesiveParams coh{};
   // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
-  // to contact when failed and parted (interface_parted, kernels/interface.hpp), or, without contact,
-  // come apart (interface_apart). With contact (contact_handover), the force kernel
+  // to contact when failed and parted (interface_parted, kernels/interface.hpp), or, without
+  // contact, come apart (interface_apart). With contact (contact_handover), the force kernel
   // sets icontact_pending when it meets a failed, parted interface not handed over yet.
   Kokkos::View<int*> icontact;
   Kokkos::View<int> icontact_pending;
   bool contact_handover = false;
   double handover_slip = 0;  // see interface_parted (kernels/interface.hpp)
+};
 
-  // Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
-  // surface node, including the faces of cracks handed over to contact during the run (the
-  // contact system's surface nodes, see Simulation::sync_platen_nodes). Their tributary areas
-  // (barea) and the platens' shear springs (platen_fs) are indexed by node id.
+// Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
+// surface node, including the faces of cracks handed over to contact during the run (the contact
+// system's surface nodes, see Simulation::sync_platen_nodes). Their tributary areas (barea) and
+// the platens' shear springs (platen_fs) are indexed by node id.
+template <int D>
+struct PlatenData {
+  int nb = 0;
   Kokkos::View<int*> bnode;
   Kokkos::View<double*> barea;                  // nn
   PlatenSet platens;
   Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, node)
   Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, node)
   Kokkos::View<double* [kPlatenAcc]> platen_acc;
+};
+
+template <int D>
+struct Model : NodeData<D>, ElementData<D>, InterfaceData<D>, PlatenData<D> {
+  static constexpr int dim = D;
+  const NodeData<D>& nodes() const { return *this; }
+  const ElementData<D>& elements() const { return *this; }
+  const InterfaceData<D>& interfaces() const { return *this; }
+  const PlatenData<D>& platen_data() const { return *this; }
 };
 
 // The cohesive history of integration point k of interface q (layout of Model::ihist: dmax, dm0,
