@@ -41,47 +41,94 @@ void print_info() {
   Kokkos::print_configuration(std::cout, false);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  // OpenMP reads its binding settings when the program loads: if the user set none, start again
-  // once with threads spread over the cores (what Kokkos recommends), else Kokkos warns and
-  // threads may migrate.
+// OpenMP reads its binding settings when the program loads: if the user set none, start again
+// once with threads spread over the cores (what Kokkos recommends), else Kokkos warns and threads
+// may migrate.
+void reexec_with_thread_binding(char** argv) {
   if (!std::getenv("OMP_PROC_BIND") && !std::getenv("FDEM_NO_REEXEC")) {
     setenv("OMP_PROC_BIND", "spread", 1);
     setenv("OMP_PLACES", "threads", 1);
     setenv("FDEM_NO_REEXEC", "1", 1);
     execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
   }
-  CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
-  app.require_subcommand(1);
-  app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);
+}
 
+// What the command line asks for.
+struct CliOptions {
   std::string case_path, out_dir;
   std::vector<std::string> sets;
   bool quiet = false;
   double checkpoint_every = -1;
   std::string restart;
+};
+
+// The subcommands run, check and info with their options, stored into `o`.
+void add_subcommands(CLI::App& app, CliOptions& o) {
   auto* run = app.add_subcommand("run", "run a case");
-  run->add_option("case", case_path, "case file (JSON)")->required();
-  run->add_option("--out", out_dir, "output folder (default: out/<case name>)");
-  run->add_option("--set", sets, "override a case field: key.path=value (repeatable)");
-  run->add_flag("--quiet", quiet, "no progress output");
-  run->add_option("--checkpoint-every", checkpoint_every,
+  run->add_option("case", o.case_path, "case file (JSON)")->required();
+  run->add_option("--out", o.out_dir, "output folder (default: out/<case name>)");
+  run->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
+  run->add_flag("--quiet", o.quiet, "no progress output");
+  run->add_option("--checkpoint-every", o.checkpoint_every,
                   "write OUT/checkpoint.h5 every this many seconds of simulated time (overrides "
                   "output.checkpoint_every; 0: none)")
       ->check(CLI::NonNegativeNumber);
-  run->add_option("--restart", restart,
+  run->add_option("--restart", o.restart,
                   "go on from a checkpoint written by --checkpoint-every (same case and --set options)");
 
   auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");
-  check->add_option("case", case_path, "case file (JSON)")->required();
-  check->add_option("--set", sets, "override a case field: key.path=value (repeatable)");
+  check->add_option("case", o.case_path, "case file (JSON)")->required();
+  check->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
 
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
+}
+
+// Runs the chosen subcommand; returns the exit status (see the top of this file).
+int dispatch(const CLI::App& app, const CliOptions& o) {
+  try {
+    if (app.got_subcommand("info")) {
+      print_info();
+    } else if (app.got_subcommand("check")) {
+      auto report = fdem::check_case(o.case_path, o.sets);
+      std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
+    } else if (app.got_subcommand("run")) {
+      fdem::RunOptions opt;
+      opt.out_dir = o.out_dir;
+      opt.overrides = o.sets;
+      opt.progress = !o.quiet;
+      opt.checkpoint_every = o.checkpoint_every;
+      opt.restart = o.restart;
+      fdem::run_case(o.case_path, opt);
+    }
+  } catch (const fdem::InputError& e) {
+    // Name the case file in every message (mesh generator errors, for one, do not).
+    std::string msg = e.what();
+    if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos)
+      msg = o.case_path + ": " + msg;
+    std::cerr << "error: " << msg << "\n";
+    return 2;
+  } catch (const fdem::NumericalError& e) {
+    std::cerr << "numerical failure: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "unexpected error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  reexec_with_thread_binding(argv);
+  CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);
+  CliOptions opts;
+  add_subcommands(app, opts);
 
   // Kokkos options (--kokkos-threads=N, ...) are taken out before CLI11 parses the rest.
-  std::vector<char*> kargs(argv, argv + argc), rest;
+  std::vector<char*> rest;
   rest.push_back(argv[0]);
   for (int i = 1; i < argc; ++i)
     if (std::string(argv[i]).rfind("--kokkos-", 0) != 0) rest.push_back(argv[i]);
@@ -93,34 +140,5 @@ int main(int argc, char** argv) {
   }
 
   Kokkos::ScopeGuard guard(argc, argv);
-  try {
-    if (app.got_subcommand("info")) {
-      print_info();
-    } else if (app.got_subcommand("check")) {
-      auto report = fdem::check_case(case_path, sets);
-      std::cout << report.dump(2) << "\n" << "case OK: " << case_path << "\n";
-    } else if (app.got_subcommand("run")) {
-      fdem::RunOptions opt;
-      opt.out_dir = out_dir;
-      opt.overrides = sets;
-      opt.progress = !quiet;
-      opt.checkpoint_every = checkpoint_every;
-      opt.restart = restart;
-      fdem::run_case(case_path, opt);
-    }
-  } catch (const fdem::InputError& e) {
-    // Name the case file in every message (mesh generator errors, for one, do not).
-    std::string msg = e.what();
-    if (!case_path.empty() && msg.find(case_path) == std::string::npos)
-      msg = case_path + ": " + msg;
-    std::cerr << "error: " << msg << "\n";
-    return 2;
-  } catch (const fdem::NumericalError& e) {
-    std::cerr << "numerical failure: " << e.what() << "\n";
-    return 3;
-  } catch (const std::exception& e) {
-    std::cerr << "unexpected error: " << e.what() << "\n";
-    return 1;
-  }
-  return 0;
+  return dispatch(app, opts);
 }

@@ -5,14 +5,17 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <string>
 
 #include "common/error.hpp"
+#include "io/hdf5_util.hpp"
 
 namespace fdem {
 
@@ -24,38 +27,11 @@ const char* kFormat = "fdem checkpoint";
 // 2: contact pairs carry a penetration allowance (contact/pair_g0)
 constexpr int kVersion = 2;
 
-// Owns one HDF5 identifier.
-class Id {
- public:
-  using Closer = herr_t (*)(hid_t);
-  Id(hid_t id, Closer c) : id_(id), close_(c) {}
-  Id(const Id&) = delete;
-  Id& operator=(const Id&) = delete;
-  ~Id() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  bool ok() const { return id_ >= 0; }
-  hid_t release() {
-    const hid_t i = id_;
-    id_ = -1;
-    return i;
-  }
+using h5::Id;
 
- private:
-  hid_t id_;
-  Closer close_;
-};
-
-herr_t first_error(unsigned n, const H5E_error2_t* e, void* data) {
-  if (n == 0 && e && e->desc) *static_cast<std::string*>(data) = e->desc;
-  return 0;
-}
-
+// The HDF5 error as " (message)", or "".
 std::string reason() {
-  std::string msg;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, first_error, &msg);
-  H5Eclear2(H5E_DEFAULT);
+  const std::string msg = h5::reason();
   return msg.empty() ? std::string() : " (" + msg + ")";
 }
 
@@ -111,26 +87,6 @@ void scalar_attr(hid_t loc, const char* name, hid_t ftype, hid_t mtype, T v, con
   Id a(H5Acreate2(loc, name, ftype, sp.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
   if (!a.ok() || H5Awrite(a.get(), mtype, &v) < 0)
     throw InputError("cannot write checkpoint '" + file + "': attribute " + name + reason());
-}
-
-bool read_string_attr(hid_t loc, const char* name, std::string& out) {
-  if (H5Aexists(loc, name) <= 0) return false;
-  Id a(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose);
-  if (!a.ok()) return false;
-  Id t(H5Aget_type(a.get()), H5Tclose);
-  if (H5Tget_class(t.get()) != H5T_STRING || H5Tis_variable_str(t.get()) > 0) return false;
-  const size_t n = H5Tget_size(t.get());
-  std::string buf(n, '\0');
-  if (H5Aread(a.get(), t.get(), buf.data()) < 0) return false;
-  out = buf.substr(0, std::strlen(buf.c_str()));
-  return true;
-}
-
-template <class T>
-bool read_scalar_attr(hid_t loc, const char* name, hid_t mtype, T& out) {
-  if (H5Aexists(loc, name) <= 0) return false;
-  Id a(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose);
-  return a.ok() && H5Aread(a.get(), mtype, &out) >= 0;
 }
 
 struct VisitData {
@@ -237,115 +193,148 @@ const std::string& StateArrays::string(const std::string& name) const {
 // ------------------------------------------------------------------------------------------------
 // write / read
 
+namespace {
+
+// One checkpoint being written: to `tmp`, then renamed to `path`.
+struct Writing {
+  const std::string& path;
+  const std::string& tmp;
+  bool kill_midway;  // test hook: kill the process when half of the datasets are written
+
+  // Removes `tmp` and throws InputError naming `path`, with HDF5's reason.
+  [[noreturn]] void fail(const std::string& what) const {
+    const std::string why = reason();
+    std::remove(tmp.c_str());
+    throw InputError("cannot write checkpoint '" + path + "': " + what + why);
+  }
+};
+
+// The attributes of the root group (layout: checkpoint.hpp).
+void write_header(hid_t f, const CheckpointHeader& h, const std::string& path) {
+  string_attr(f, "format", kFormat, path);
+  scalar_attr<int>(f, "version", H5T_STD_I32LE, H5T_NATIVE_INT, kVersion, path);
+  scalar_attr<int>(f, "dimension", H5T_STD_I32LE, H5T_NATIVE_INT, h.dim, path);
+  scalar_attr<long long>(f, "num_nodes", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.nodes, path);
+  scalar_attr<long long>(f, "num_elements", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.elements, path);
+  scalar_attr<long long>(f, "num_interfaces", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.interfaces,
+                         path);
+  string_attr(f, "case_hash", h.case_hash, path);
+  string_attr(f, "mesh_hash", h.mesh_hash, path);
+  scalar_attr<double>(f, "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, h.time, path);
+  scalar_attr<long long>(f, "step", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.step, path);
+}
+
+// One dataset per state entry, at its name (intermediate groups created): float64, int64, then
+// fixed-length string scalars.
+void write_datasets(hid_t f, const StateArrays& s, const Writing& w) {
+  Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  H5Pset_create_intermediate_group(lcpl.get(), 1);
+  const size_t total = s.f64.size() + s.i64.size() + s.str.size();
+  size_t written = 0;
+  auto one_more = [&] {
+    if (++written == total / 2 && w.kill_midway) kill_now();
+  };
+  auto dataset = [&](const std::string& name, hid_t ftype, hid_t mtype, size_t n, const void* data) {
+    const hsize_t dims[1] = {static_cast<hsize_t>(n)};
+    Id sp(H5Screate_simple(1, dims, nullptr), H5Sclose);
+    Id d(H5Dcreate2(f, name.c_str(), ftype, sp.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+    if (!d.ok()) w.fail("cannot create dataset '" + name + "'");
+    if (n > 0 && H5Dwrite(d.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+      w.fail("cannot write dataset '" + name + "'");
+    one_more();
+  };
+  for (const auto& [name, v] : s.f64) dataset(name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.size(), v.data());
+  for (const auto& [name, v] : s.i64) dataset(name, H5T_STD_I64LE, H5T_NATIVE_LLONG, v.size(), v.data());
+  for (const auto& [name, v] : s.str) {
+    Id t(H5Tcopy(H5T_C_S1), H5Tclose);
+    H5Tset_size(t.get(), std::max<size_t>(1, v.size()));
+    Id sp(H5Screate(H5S_SCALAR), H5Sclose);
+    Id d(H5Dcreate2(f, name.c_str(), t.get(), sp.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
+    const std::string buf = v.empty() ? std::string(1, '\0') : v;
+    if (!d.ok() || H5Dwrite(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
+      w.fail("cannot write dataset '" + name + "'");
+    one_more();
+  }
+}
+
+// Writes the whole checkpoint to w.tmp; on failure w.tmp is removed.
+void write_tmp(const CheckpointHeader& h, const StateArrays& s, const Writing& w) {
+  Id fapl = h5::file_access_without_locking();
+  Id file(H5Fcreate(w.tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose);
+  if (!file.ok()) w.fail("cannot create " + w.tmp);
+  try {
+    write_header(file.get(), h, w.path);
+    write_datasets(file.get(), s, w);
+  } catch (...) {
+    H5Fclose(file.release());
+    std::remove(w.tmp.c_str());
+    throw;
+  }
+  if (H5Fclose(file.release()) < 0) w.fail("cannot close " + w.tmp + " (disk full?)");
+}
+
+// Syncs w.tmp, renames it over w.path and syncs the folder.
+void commit(const Writing& w) {
+  try {
+    fsync_path(w.tmp, false, w.path);
+  } catch (...) {
+    std::remove(w.tmp.c_str());
+    throw;
+  }
+  if (std::rename(w.tmp.c_str(), w.path.c_str()) != 0) {
+    const int err = errno;
+    std::remove(w.tmp.c_str());
+    throw InputError("cannot write checkpoint '" + w.path + "' (renaming " + w.tmp + "): " +
+                     std::strerror(err));
+  }
+  const fs::path dir = fs::path(w.path).parent_path();
+  fsync_path(dir.empty() ? std::string(".") : dir.string(), true, w.path);
+}
+
+}  // namespace
+
 void write_checkpoint(const std::string& path, const CheckpointHeader& h, const StateArrays& s) {
   static const KillHook hook;
   static int count = 0;
   ++count;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  h5::silence();
   const std::string tmp = path + ".tmp";
-  auto fail = [&](const std::string& what) {
-    const std::string why = reason();
-    std::remove(tmp.c_str());
-    throw InputError("cannot write checkpoint '" + path + "': " + what + why);
-  };
-  {
-    Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-#if H5_VERSION_GE(1, 10, 7)
-    H5Pset_file_locking(fapl.get(), 0, 1);
-#endif
-    Id file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose);
-    if (!file.ok()) fail("cannot create " + tmp);
-    try {
-      const hid_t f = file.get();
-      string_attr(f, "format", kFormat, path);
-      scalar_attr<int>(f, "version", H5T_STD_I32LE, H5T_NATIVE_INT, kVersion, path);
-      scalar_attr<int>(f, "dimension", H5T_STD_I32LE, H5T_NATIVE_INT, h.dim, path);
-      scalar_attr<long long>(f, "num_nodes", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.nodes, path);
-      scalar_attr<long long>(f, "num_elements", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.elements, path);
-      scalar_attr<long long>(f, "num_interfaces", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.interfaces, path);
-      string_attr(f, "case_hash", h.case_hash, path);
-      string_attr(f, "mesh_hash", h.mesh_hash, path);
-      scalar_attr<double>(f, "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, h.time, path);
-      scalar_attr<long long>(f, "step", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.step, path);
-
-      Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-      H5Pset_create_intermediate_group(lcpl.get(), 1);
-      const size_t total = s.f64.size() + s.i64.size() + s.str.size();
-      size_t written = 0;
-      auto dataset = [&](const std::string& name, hid_t ftype, hid_t mtype, size_t n, const void* data) {
-        const hsize_t dims[1] = {static_cast<hsize_t>(n)};
-        Id sp(H5Screate_simple(1, dims, nullptr), H5Sclose);
-        Id d(H5Dcreate2(f, name.c_str(), ftype, sp.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
-        if (!d.ok()) fail("cannot create dataset '" + name + "'");
-        if (n > 0 && H5Dwrite(d.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
-          fail("cannot write dataset '" + name + "'");
-        if (++written == total / 2 && hook.during == count) kill_now();
-      };
-      for (const auto& [name, v] : s.f64) dataset(name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.size(), v.data());
-      for (const auto& [name, v] : s.i64) dataset(name, H5T_STD_I64LE, H5T_NATIVE_LLONG, v.size(), v.data());
-      for (const auto& [name, v] : s.str) {
-        Id t(H5Tcopy(H5T_C_S1), H5Tclose);
-        H5Tset_size(t.get(), std::max<size_t>(1, v.size()));
-        Id sp(H5Screate(H5S_SCALAR), H5Sclose);
-        Id d(H5Dcreate2(f, name.c_str(), t.get(), sp.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
-        const std::string buf = v.empty() ? std::string(1, '\0') : v;
-        if (!d.ok() || H5Dwrite(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
-          fail("cannot write dataset '" + name + "'");
-        if (++written == total / 2 && hook.during == count) kill_now();
-      }
-    } catch (...) {
-      H5Fclose(file.release());
-      std::remove(tmp.c_str());
-      throw;
-    }
-    if (H5Fclose(file.release()) < 0) fail("cannot close " + tmp + " (disk full?)");
-  }
-  try {
-    fsync_path(tmp, false, path);
-  } catch (...) {
-    std::remove(tmp.c_str());
-    throw;
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    std::remove(tmp.c_str());
-    throw InputError("cannot write checkpoint '" + path + "' (renaming " + tmp + "): " + std::strerror(err));
-  }
-  const fs::path dir = fs::path(path).parent_path();
-  fsync_path(dir.empty() ? std::string(".") : dir.string(), true, path);
+  const Writing w{path, tmp, hook.during == count};
+  write_tmp(h, s, w);
+  commit(w);
   if (hook.after == count) kill_now();
 }
 
 StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h) {
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  h5::silence();
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("restart file '" + path + "' does not exist");
-  if (fs::is_directory(path, ec)) throw InputError("restart file '" + path + "' is a folder, not a checkpoint");
+  if (fs::is_directory(path, ec))
+    throw InputError("restart file '" + path + "' is a folder, not a checkpoint");
   if (H5Fis_hdf5(path.c_str()) <= 0) {
     H5Eclear2(H5E_DEFAULT);
-    throw InputError("restart file '" + path + "' is not an HDF5 file (give a checkpoint.h5 written by --checkpoint-every)");
+    throw InputError("restart file '" + path +
+                     "' is not an HDF5 file (give a checkpoint.h5 written by --checkpoint-every)");
   }
-  Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
-#if H5_VERSION_GE(1, 10, 7)
-  H5Pset_file_locking(fapl.get(), 0, 1);
-#endif
+  Id fapl = h5::file_access_without_locking();
   Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose);
   if (!file.ok()) throw InputError("restart file '" + path + "' cannot be opened" + reason());
   const hid_t f = file.get();
   std::string format;
   int version = 0;
-  if (!read_string_attr(f, "format", format) || format != kFormat)
+  if (!h5::read_string_attr(f, "format", format) || format != kFormat)
     throw InputError("restart file '" + path + "' is an HDF5 file but not an fdem checkpoint");
-  if (!read_scalar_attr(f, "version", H5T_NATIVE_INT, version) || version != kVersion)
+  if (!h5::read_scalar_attr(f, "version", H5T_NATIVE_INT, version) || version != kVersion)
     throw InputError("restart file '" + path + "' is a checkpoint of format version " +
                      std::to_string(version) + "; this fdem reads version " + std::to_string(kVersion));
-  bool ok = read_scalar_attr(f, "dimension", H5T_NATIVE_INT, h.dim) &&
-            read_scalar_attr(f, "num_nodes", H5T_NATIVE_LLONG, h.nodes) &&
-            read_scalar_attr(f, "num_elements", H5T_NATIVE_LLONG, h.elements) &&
-            read_scalar_attr(f, "num_interfaces", H5T_NATIVE_LLONG, h.interfaces) &&
-            read_string_attr(f, "case_hash", h.case_hash) && read_string_attr(f, "mesh_hash", h.mesh_hash) &&
-            read_scalar_attr(f, "time", H5T_NATIVE_DOUBLE, h.time) &&
-            read_scalar_attr(f, "step", H5T_NATIVE_LLONG, h.step);
+  bool ok = h5::read_scalar_attr(f, "dimension", H5T_NATIVE_INT, h.dim) &&
+            h5::read_scalar_attr(f, "num_nodes", H5T_NATIVE_LLONG, h.nodes) &&
+            h5::read_scalar_attr(f, "num_elements", H5T_NATIVE_LLONG, h.elements) &&
+            h5::read_scalar_attr(f, "num_interfaces", H5T_NATIVE_LLONG, h.interfaces) &&
+            h5::read_string_attr(f, "case_hash", h.case_hash) &&
+            h5::read_string_attr(f, "mesh_hash", h.mesh_hash) &&
+            h5::read_scalar_attr(f, "time", H5T_NATIVE_DOUBLE, h.time) &&
+            h5::read_scalar_attr(f, "step", H5T_NATIVE_LLONG, h.step);
   if (!ok) throw InputError("restart file '" + path + "': checkpoint header is incomplete" + reason());
   StateArrays s;
   s.file = path;

@@ -1,0 +1,80 @@
+#include "io/hdf5_util.hpp"
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "common/error.hpp"
+
+namespace fdem {
+namespace h5 {
+
+namespace {
+herr_t first_error(unsigned n, const H5E_error2_t* e, void* data) {
+  if (n == 0 && e && e->desc) *static_cast<std::string*>(data) = e->desc;
+  return 0;
+}
+}  // namespace
+
+void silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+std::string reason() {
+  std::string msg;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, first_error, &msg);
+  H5Eclear2(H5E_DEFAULT);
+  return msg;
+}
+
+Id file_access_without_locking() {
+  Id fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+#if H5_VERSION_GE(1, 10, 7)
+  if (fapl.ok()) H5Pset_file_locking(fapl.get(), 0, 1);
+#endif
+  return fapl;
+}
+
+bool read_string_attr(hid_t loc, const char* name, std::string& out) {
+  if (H5Aexists(loc, name) <= 0) return false;
+  Id a(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose);
+  if (!a.ok()) return false;
+  Id t(H5Aget_type(a.get()), H5Tclose);
+  if (H5Tget_class(t.get()) != H5T_STRING || H5Tis_variable_str(t.get()) > 0) return false;
+  const size_t n = H5Tget_size(t.get());
+  std::string buf(n, '\0');
+  if (H5Aread(a.get(), t.get(), buf.data()) < 0) return false;
+  out = buf.substr(0, std::strlen(buf.c_str()));
+  return true;
+}
+
+void fail(const std::string& file, const std::string& what) {
+  const std::string why = reason();
+  throw InputError("HDF5 error in '" + file + "': " + what + (why.empty() ? "" : " (" + why + ")"));
+}
+
+void write_dataset(hid_t loc, const std::string& name, hid_t file_type, hid_t mem_type,
+                   const std::vector<hsize_t>& dims, const void* data, const std::string& file) {
+  Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  if (!space.ok()) fail(file, "cannot create dataspace for '" + name + "'");
+  Id dset(H5Dcreate2(loc, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT,
+                     H5P_DEFAULT),
+          H5Dclose);
+  if (!dset.ok()) fail(file, "cannot create dataset '" + name + "'");
+  hsize_t count = 1;
+  for (hsize_t d : dims) count *= d;
+  if (count > 0 && H5Dwrite(dset.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) {
+    fail(file, "cannot write dataset '" + name + "'");
+  }
+}
+
+void write_doubles(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                   const double* data, const std::string& file) {
+  write_dataset(loc, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, dims, data, file);
+}
+
+void write_ints(hid_t loc, const std::string& name, const std::vector<hsize_t>& dims,
+                const int* data, const std::string& file) {
+  write_dataset(loc, name, H5T_STD_I32LE, H5T_NATIVE_INT, dims, data, file);
+}
+
+}  // namespace h5
+}  // namespace fdem
