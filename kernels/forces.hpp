@@ -20,71 +20,50 @@ constexpr int kChunk =
 template <int D>
 struct ForceKernel {
   Kokkos::View<double* [D]> x;
-  Kokkos::View<int* [D + 1]> elem;
-  Kokkos::View<double* [D][D]> grad;
-  Kokkos::View<double*> vol0;
-  Kokkos::View<int*> emat;
-  Kokkos::View<double* [3]> mat;
-  Kokkos::View<int* [2 * D]> iface;
-  Kokkos::View<double* [D][4]> ihist;
-  Kokkos::View<double*> iarea;
-  CohesiveParams coh;
-  Kokkos::View<int*> icontact;
-  Kokkos::View<int> pending;
-  bool handover;
-  double handover_slip;
-  Kokkos::View<int*> ichunk;
+  ElementData<D> el;
+  InterfaceData<D> in;
   ForceScatter<D> sf;
-  int ne, ni, nbc;
+  int nbc;
   bool fused;
 
   // Bulk element e.
   template <class Acc>
   KOKKOS_INLINE_FUNCTION void bulk(const int e, Acc& acc) const {
     double xe[D + 1][D], G[D][D], fe[D + 1][D];
+    gather_element<D>(x, el, e, xe, G);
+    const int mt = el.emat(e);
+    element_forces<D>(xe, G, el.vol0(e), el.mat(mt, 0), el.mat(mt, 1), fe);
     for (int a = 0; a < D + 1; ++a)
-      for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
-    for (int b = 0; b < D; ++b)
-      for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
-    const int mt = emat(e);
-    element_forces<D>(xe, G, vol0(e), mat(mt, 0), mat(mt, 1), fe);
-    for (int a = 0; a < D + 1; ++a)
-      for (int i = 0; i < D; ++i) acc(elem(e, a), i) += fe[a][i];
+      for (int i = 0; i < D; ++i) acc(el.elem(e, a), i) += fe[a][i];
   }
 
   // Interface q: its history and, while it carries, its forces.
   template <class Acc>
   KOKKOS_INLINE_FUNCTION void interface(const int q, Acc& acc) const {
-    if (handover && icontact(q)) return;  // failed: its faces are in contact instead
+    const bool handover = in.contact_handover;
+    if (handover && in.icontact(q)) return;  // failed: its faces are in contact instead
     double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
     CohesivePoint h[D];
-    for (int k = 0; k < D; ++k) {
-      for (int i = 0; i < D; ++i) {
-        xa[k][i] = x(iface(q, k), i);
-        xb[k][i] = x(iface(q, D + k), i);
-      }
-      h[k] = load_point(ihist, q, k);
-    }
+    gather_interface<D>(x, in.iface, q, xa, xb);
+    for (int k = 0; k < D; ++k) h[k] = load_point(in.ihist, q, k);
     // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
     // without contact, come apart for good: interface_apart).
-    if (icontact(q)) return;
+    if (in.icontact(q)) return;
     if (interface_apart<D>(xa, xb, h)) {
-      interface_fail_all<D>(xa, xb, iarea(q), coh, h);
-      for (int k = 0; k < D; ++k) {
-        store_point(ihist, q, k, h[k]);
-      }
-      if (handover) Kokkos::atomic_exchange(&pending(), 1);
-      else icontact(q) = 1;
+      interface_fail_all<D>(xa, xb, in.iarea(q), in.coh, h);
+      for (int k = 0; k < D; ++k) store_point(in.ihist, q, k, h[k]);
+      if (handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
+      else in.icontact(q) = 1;
       return;
     }
-    const double dmean = interface_forces<D>(xa, xb, iarea(q), coh, h, fa, fb);
-    if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, handover_slip))
-      Kokkos::atomic_exchange(&pending(), 1);
+    const double dmean = interface_forces<D>(xa, xb, in.iarea(q), in.coh, h, fa, fb);
+    if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
+      Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     for (int k = 0; k < D; ++k) {
-      store_point(ihist, q, k, h[k]);
+      store_point(in.ihist, q, k, h[k]);
       for (int i = 0; i < D; ++i) {
-        acc(iface(q, k), i) += fa[k][i];
-        acc(iface(q, D + k), i) += fb[k][i];
+        acc(in.iface(q, k), i) += fa[k][i];
+        acc(in.iface(q, D + k), i) += fb[k][i];
       }
     }
   }
@@ -92,14 +71,14 @@ struct ForceKernel {
   KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
     auto acc = sf.access();
     if (fused) {
-      const int e1 = kmin((c + 1) * kChunk, ne);
+      const int e1 = kmin((c + 1) * kChunk, el.ne);
       for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
-      for (int q = ichunk(c); q < ichunk(c + 1); ++q) interface(q, acc);
+      for (int q = in.ichunk(c); q < in.ichunk(c + 1); ++q) interface(q, acc);
     } else if (c < nbc) {
-      const int e1 = kmin((c + 1) * kChunk, ne);
+      const int e1 = kmin((c + 1) * kChunk, el.ne);
       for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
     } else {
-      const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, ni);
+      const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, in.ni);
       for (int q = i0; q < i1; ++q) interface(q, acc);
     }
   }
@@ -116,11 +95,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
   const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
   const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
   sf.reset();
-  const ForceKernel<D> kernel{m.x,     m.elem,  m.grad,     m.vol0,  m.emat,
-                              m.mat,   m.iface, m.ihist,    m.iarea, m.coh,
-                              m.icontact, m.icontact_pending, m.contact_handover, m.handover_slip,
-                              m.ichunk, sf,     ne,          ni,      nbc,
-                              fused};
+  const ForceKernel<D> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
   Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, fused ? nbc : nbc + nic), kernel);
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;

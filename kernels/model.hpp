@@ -120,6 +120,16 @@ KOKKOS_INLINE_FUNCTION void store_point(const HistView& ihist, int q, int k, con
   ihist(q, k, 3) = h.wd;
 }
 
+// Positions of element e's nodes (xe[a], a <= D) and its reference shape-function gradients G.
+template <int D, class PosView>
+KOKKOS_INLINE_FUNCTION void gather_element(const PosView& x, const ElementData<D>& el, int e, double (&xe)[D + 1][D],
+                                           double (&G)[D][D]) {
+  for (int a = 0; a < D + 1; ++a)
+    for (int i = 0; i < D; ++i) xe[a][i] = x(el.elem(e, a), i);
+  for (int b = 0; b < D; ++b)
+    for (int j = 0; j < D; ++j) G[b][j] = el.grad(e, b, j);
+}
+
 // Positions of interface q's node pairs: xa[k] (side A) and xb[k] (side B), k < D.
 template <int D, class PosView, class IfaceView>
 KOKKOS_INLINE_FUNCTION void gather_interface(const PosView& x, const IfaceView& iface, int q, double (&xa)[D][D],

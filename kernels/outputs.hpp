@@ -12,24 +12,17 @@ namespace fdem {
 // Bulk strain energy.
 template <int D>
 double strain_energy(const Model<D>& m) {
-  auto x = m.x;
-  auto elem = m.elem;
-  auto grad = m.grad;
-  auto vol0 = m.vol0;
-  auto emat = m.emat;
-  auto mat = m.mat;
+  const auto x = m.x;
+  const ElementData<D> el = m;
   double w = 0;
   Kokkos::parallel_reduce(
       "fdem::strain_energy", Kokkos::RangePolicy<ExecSpace>(0, m.ne),
       KOKKOS_LAMBDA(const int e, double& s) {
         double xe[D + 1][D], G[D][D], F[D][D], S[D][D];
-        for (int a = 0; a < D + 1; ++a)
-          for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
-        for (int b = 0; b < D; ++b)
-          for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+        gather_element<D>(x, el, e, xe, G);
         deformation_gradient<D>(xe, G, F);
-        const int mt = emat(e);
-        s += vol0(e) * svk_stress<D>(F, mat(mt, 0), mat(mt, 1), S);
+        const int mt = el.emat(e);
+        s += el.vol0(e) * svk_stress<D>(F, el.mat(mt, 0), el.mat(mt, 1), S);
       },
       w);
   return w;
@@ -61,28 +54,20 @@ struct InterfaceSums {
 // The interfaces' energies and counts (InterfaceSums).
 template <int D>
 InterfaceSums interface_state(const Model<D>& m) {
-  auto x = m.x;
-  auto iface = m.iface;
-  auto ihist = m.ihist;
-  auto iarea = m.iarea;
-  const auto coh = m.coh;
-  auto icontact = m.icontact;
+  const auto x = m.x;
+  const InterfaceData<D> in = m;
   InterfaceSums out;
   Kokkos::parallel_reduce(
       "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
       KOKKOS_LAMBDA(const int q, InterfaceSums& s) {
         double xa[D][D], xb[D][D], n[D], ap;
-        for (int k = 0; k < D; ++k)
-          for (int i = 0; i < D; ++i) {
-            xa[k][i] = x(iface(q, k), i);
-            xb[k][i] = x(iface(q, D + k), i);
-          }
+        gather_interface<D>(x, in.iface, q, xa, xb);
         interface_frame<D>(xa, xb, 1.0, n, ap);
-        ap = iarea(q);
-        const bool handed = icontact(q);  // carries nothing, stores nothing
+        ap = in.iarea(q);
+        const bool handed = in.icontact(q);  // carries nothing, stores nothing
         bool any = false, all = true;
         for (int k = 0; k < D; ++k) {
-          const CohesivePoint h = load_point(ihist, q, k);
+          const CohesivePoint h = load_point(in.ihist, q, k);
           double d[D], dn = 0, ds2 = 0;
           for (int i = 0; i < D; ++i) {
             d[i] = xb[k][i] - xa[k][i];
@@ -90,7 +75,7 @@ InterfaceSums interface_state(const Model<D>& m) {
           }
           for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
           const double dmg = cohesive_damage(h);
-          if (!handed) s.elastic += ap * cohesive_stored(coh, dn, kmath::sqrt(ds2), dmg);
+          if (!handed) s.elastic += ap * cohesive_stored(in.coh, dn, kmath::sqrt(ds2), dmg);
           s.fracture += ap * cohesive_dissipation(h);
           any = any || dmg > 0.0;
           all = all && dmg >= 1.0;
@@ -135,22 +120,15 @@ void node_list_displacement(const Model<D>& m, const Kokkos::View<int*>& nodes, 
 // Per-element Cauchy stress (6 components) and per-interface mean damage, for snapshots.
 template <int D>
 void element_stress(const Model<D>& m, const Kokkos::View<double* [6]>& out) {
-  auto x = m.x;
-  auto elem = m.elem;
-  auto grad = m.grad;
-  auto emat = m.emat;
-  auto mat = m.mat;
-  const bool ps = m.plane_stress;
+  const auto x = m.x;
+  const ElementData<D> el = m;
   Kokkos::parallel_for(
       "fdem::element_stress", Kokkos::RangePolicy<ExecSpace>(0, m.ne), KOKKOS_LAMBDA(const int e) {
         double xe[D + 1][D], G[D][D], F[D][D], s6[6];
-        for (int a = 0; a < D + 1; ++a)
-          for (int i = 0; i < D; ++i) xe[a][i] = x(elem(e, a), i);
-        for (int b = 0; b < D; ++b)
-          for (int j = 0; j < D; ++j) G[b][j] = grad(e, b, j);
+        gather_element<D>(x, el, e, xe, G);
         deformation_gradient<D>(xe, G, F);
-        const int mt = emat(e);
-        cauchy_stress<D>(F, mat(mt, 0), mat(mt, 1), ps, s6);
+        const int mt = el.emat(e);
+        cauchy_stress<D>(F, el.mat(mt, 0), el.mat(mt, 1), el.plane_stress, s6);
         for (int c = 0; c < 6; ++c) out(e, c) = s6[c];
       });
 }
