@@ -23,6 +23,7 @@
 #include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
 #include "kernels/model.hpp"
+#include "solver/contact_topology.hpp"
 
 namespace fdem {
 
@@ -94,20 +95,12 @@ class ContactSystem {
   void build(const Model<D>& m);
 
  private:
-  // Host data of the constructor's steps (contact_system.cpp).
-  struct HostFaces;
-  struct HostShares;
-  struct HostGroups;
-  // Constructor steps: the contact law and search distances from the case (defaults from the
-  // mesh and materials); the faces with their nodes, owners and interfaces; each face's share of
-  // its nodes' areas and the faces around each node; the contact springs' stable step; the vertex
-  // groups; device copies; work arrays.
+  // Constructor steps (the host topology of the surfaces: solver/contact_topology.hpp): the
+  // contact law and search distances from the case (defaults from the mesh and materials); the
+  // contact springs' stable step; device copies of the topology; work arrays.
   void set_law(const Case& c, const HostMesh& mesh);
-  HostFaces face_topology(const Case& c, const HostMesh& mesh) const;
-  HostShares node_shares(const HostMesh& mesh, const HostFaces& F, double thick) const;
   double contact_stable_step(const std::vector<double>& area, const std::vector<double>& mass) const;
-  HostGroups vertex_groups(const HostMesh& mesh) const;
-  void upload(const HostFaces& F, const HostShares& S, const HostGroups& G, const Model<D>& m);
+  void upload(const ContactFaces& F, const FaceShares& H, const HostVertexGroups& G, const Model<D>& m);
   void allocate_work();
   // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
   void refresh_surfaces(const Model<D>& m);
