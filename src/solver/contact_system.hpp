@@ -1,7 +1,7 @@
 #pragma once
-// Contact between deformable bodies and fragments (METHOD.md section 6): host orchestration of the
-// device kernels in kernels/contact.hpp. Owned by Simulation<D>, called once per step after the
-// platens and before the node update.
+// Contact between deformable bodies and fragments (docs/theory.md section 6b): host orchestration of
+// the device kernels in kernels/contact/ (it calls their launchers only; see kernels/contact.hpp).
+// Owned by Simulation<D>, called once per step after the platens and before the node update.
 //
 // Surfaces: the outer boundary faces of every body (always active) and both faces of every
 // interface, active once the interface has failed (all its points at D = 1); the cohesive kernel
@@ -23,6 +23,7 @@
 #include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
 #include "kernels/model.hpp"
+#include "solver/contact_topology.hpp"
 
 namespace fdem {
 
@@ -89,18 +90,32 @@ class ContactSystem {
   void save_state(StateArrays& s) const;
   void load_state(const StateArrays& s, const Model<D>& m);
 
-  // Internal steps (public only because CUDA lambdas may not sit in private member functions):
-  // recompute active faces, clusters and surface nodes; rebuild the grid and candidate lists.
-  void refresh_surfaces(const Model<D>& m);
+  // Rebuilds the grid and the candidate lists now (update() does it when a node has moved more
+  // than half the skin; public for the tests: the history must survive rebuilds).
   void build(const Model<D>& m);
 
  private:
+  // Constructor steps (the host topology of the surfaces: solver/contact_topology.hpp): the
+  // contact law and search distances from the case (defaults from the mesh and materials); the
+  // contact springs' stable step; device copies of the topology; work arrays.
+  void set_law(const Case& c, const HostMesh& mesh);
+  double contact_stable_step(const std::vector<double>& area, const std::vector<double>& mass) const;
+  void upload(const ContactFaces& F, const FaceShares& H, const HostVertexGroups& G, const Model<D>& m);
+  void allocate_work();
+  // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
+  void refresh_surfaces(const Model<D>& m);
+  // Room for `cap` candidate pairs in P and in the narrow phase's scratch (which only grows).
+  void reserve_pairs(PairList<D>& P, int cap);
+  // The checkpoint fields other than the pair lists (save_state and load_state visit the same
+  // list): f(dataset name, View or scalar member).
+  template <class Self, class F>
+  static void state_fields(Self& self, F&& f);
+
   int nn_ = 0, ni_ = 0, nf_ = 0, ne_ = 0, nfree_ = 0;
   double stable_ = 0;
   ContactSurface<D> surf_;
   PairFilter<D> filter_;
-  Kokkos::View<int*> goff_, gent_, gcopy_off_, gcopy_;  // vertex groups with interfaces (CSR)
-  int ngroups_ = 0;
+  VertexGroups groups_;  // vertex groups with interfaces
   Kokkos::View<int*> afaces_, slaves_, mark_;
   int na_ = 0, ns_ = 0;
   CellGrid<D> grid_;

@@ -1,0 +1,434 @@
+#pragma once
+// Narrow phase of contact (docs/theory.md section 6b), every step, one thread per surface node
+// over its candidates: gap, normal and contact point of the node against each candidate face;
+// normal and shear penalty springs (K_n A_c, K_s A_c), no tension, incremental shear force with
+// Coulomb friction and cohesion (kernels/friction.hpp); the shear force of each (node, face) pair
+// is kept between steps and across rebuilds. Forces go to the force kernel's scatter view.
+#include "kernels/contact/broad_phase.hpp"
+#include "kernels/contact/surfaces.hpp"
+#include "kernels/friction.hpp"
+
+namespace fdem {
+
+// Penalty and friction parameters of the contact law, and the geometric tolerances.
+struct ContactLaw {
+  double kn, ks;     // Pa/m, times the contact area
+  double mu, coh;    // friction coefficient, cohesion (Pa)
+  double dpen;       // deepest penetration recognised (m); deeper nodes are not in contact
+  double tol;        // a contact fades out as its projection leaves the face by this much (barycentric)
+  double cos_same;   // coplanar test: faces of one piece with normals closer than this share a contact
+};
+
+// Scratch of the narrow phase, one entry per candidate pair (sized like the pair list).
+template <int D>
+struct PairScratch {
+  Kokkos::View<double*> g, phi, depth, w, rel;
+  Kokkos::View<double* [D]> n;
+};
+
+// Node s against a free element e (all its faces are surfaces: a fragment that is one element):
+// the node is in contact when it lies inside e, with the depth d = min over the faces of the
+// distance to the face's plane, through the nearest face. The potential 0.5 K A d^2 is continuous
+// (zero on e's boundary, the nearest face changes where two depths are equal), so contacts with
+// fragments neither create nor lose energy, and a node at a corner shared by many fragments is in
+// contact only with the one it has entered. Returns the depth (<= 0: outside) and the local
+// index of the vertex opposite the nearest face. Uses the planes from element_planes. (It takes
+// the surface, not the plane View: CUDA 13.0's cicc crashed on a device function with a
+// View<double* [D + 1][D + 1]> parameter.)
+struct ElementDepth {
+  double depth;  // <= 0: outside
+  int nearest;   // local index of the vertex opposite the nearest face (-1: outside)
+};
+
+template <int D>
+KOKKOS_INLINE_FUNCTION ElementDepth element_depth(const ContactSurface<D>& S, int e, const double (&p)[D]) {
+  ElementDepth r{1e300, -1};
+  for (int a = 0; a <= D; ++a) {
+    double d = S.eplane(e, a, D);
+    for (int k = 0; k < D; ++k) d -= S.eplane(e, a, k) * p[k];
+    if (d < r.depth) {
+      r.depth = d;
+      r.nearest = d > 0.0 ? a : -1;
+    }
+  }
+  return r;
+}
+
+// Fade of a node against a face of a piece that is not a single free element, with least
+// barycentric coordinate `score` of the projection: full on the face, fading out smoothly (C1)
+// over tol beyond its edge, so that faces meeting at an edge or vertex share a node (their
+// weights are then normalised, see contact_forces).
+KOKKOS_INLINE_FUNCTION double contact_fade(double s, double tol) {
+  if (s >= 0.0) return 1.0;
+  if (s <= -tol) return 0.0;
+  const double t = (s + tol) / tol;
+  return t * t * (3.0 - 2.0 * t);
+}
+
+// A node is in contact with a face only if its own surface faces it: a node of the body below,
+// just under the edge of a block resting on it, is behind the plane of the block's side face
+// (and, once the block has sunk into the penalty by a little, within its extent), but its
+// surface points up, not towards the side face, and must not be pushed sideways (it would
+// plough the block). `facing` = max over the node's active faces of
+// -n_node . n_face; the weight rises smoothly from 0 at facing 0.2 to 1 at 0.5.
+KOKKOS_INLINE_FUNCTION double facing_fade(double facing) {
+  if (facing >= 0.5) return 1.0;
+  if (facing <= 0.2) return 0.0;
+  const double t = (facing - 0.2) / 0.3;
+  return t * t * (3.0 - 2.0 * t);
+}
+
+template <int D>
+KOKKOS_INLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, const double (&n)[D]) {
+  double best = -1.0;
+  for (int q = S.nfoff(s); q < S.nfoff(s + 1); ++q) {
+    const int f2 = S.nface(q);
+    if (!S.factive(f2)) continue;
+    double cw = 0;
+    for (int k = 0; k < D; ++k) cw -= S.fgeo(S.fslot(f2), D + k) * n[k];
+    best = cw > best ? cw : best;
+  }
+  return best;
+}
+
+// Two faces of one piece: they share a vertex whose copies are joined by intact material (same
+// node, or copies in one cluster).
+template <int D>
+KOKKOS_INLINE_FUNCTION bool same_piece(const ContactSurface<D>& S, int fa, int fb) {
+  for (int i = 0; i < D; ++i) {
+    const int va = S.fnode(fa, i);
+    for (int k = 0; k < D; ++k) {
+      const int vb = S.fnode(fb, k);
+      if (S.vgrp(va) == S.vgrp(vb) && S.clus(va) == S.clus(vb)) return true;
+    }
+  }
+  return false;
+}
+
+// The largest contact energy of node s at the last step with a face related to face fc (of the
+// same piece, see same_piece), as depth(j) = depth * sqrt(effective area) = sqrt(2 U / K_n) (-1:
+// not in contact): a contact with fc of effective area A can take over the depth
+// related_depth / sqrt(A), the one at which it stores that energy (see contact_pair). 0 when there
+// is none.
+template <int D>
+KOKKOS_INLINE_FUNCTION double related_depth(const ContactSurface<D>& S, const Kokkos::View<int*>& pface,
+                                            const Kokkos::View<double*>& depth, int b, int e, int fc) {
+  double d = 0.0;
+  for (int jj = b; jj < e; ++jj)
+    if (depth(jj) > d && same_piece<D>(S, fc, pface(jj))) d = depth(jj);
+  return d;
+}
+
+// Results of one narrow-phase pass (a reduction type): energy dissipated by the slip of the shear
+// springs and released when a contact opens, number of active contacts (sums); largest squared
+// displacement of a surface node since the last build and largest squared speed (maxima), for the
+// rebuild test of the next step.
+struct ContactSums {
+  double dissipated, active, d2max, v2max;
+  KOKKOS_INLINE_FUNCTION ContactSums() : dissipated(0), active(0), d2max(0), v2max(0) {}
+  KOKKOS_INLINE_FUNCTION ContactSums& operator+=(const ContactSums& o) {
+    dissipated += o.dissipated;
+    active += o.active;
+    d2max = o.d2max > d2max ? o.d2max : d2max;
+    v2max = o.v2max > v2max ? o.v2max : v2max;
+    return *this;
+  }
+#if KOKKOS_VERSION < 40000
+  KOKKOS_INLINE_FUNCTION void operator+=(const volatile ContactSums& o) volatile {
+    dissipated += o.dissipated;
+    active += o.active;
+    d2max = o.d2max > d2max ? o.d2max : d2max;
+    v2max = o.v2max > v2max ? o.v2max : v2max;
+  }
+#endif
+};
+// Pair j not (any more) in contact at gap g: the allowance g0 follows the node out; a contact
+// that ended (was) dissipates its shear spring's energy and the work of its last half step du.
+template <int D, bool Fric>
+KOKKOS_INLINE_FUNCTION void contact_open(const ContactLaw& L, const Kokkos::View<double*>& pfn,
+                                         const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
+                                         const Kokkos::View<double* [D]>& pfs, int j, double g, double g0,
+                                         bool was, const double (&du)[D], ContactSums& sums) {
+  pg0(j) = g >= g0 ? (g < 0.0 ? g : 0.0) : g0;
+  if (was) {
+    if constexpr (Fric) {
+      double f2 = 0, w = 0;
+      for (int k = 0; k < D; ++k) {
+        f2 += pfs(j, k) * pfs(j, k);
+        w += pfs(j, k) * du[k];
+        pfs(j, k) = 0.0;
+      }
+      sums.dissipated += 0.5 * f2 / (L.ks * pac(j)) - 0.5 * w;
+    }
+    pfn(j) = 0.0;
+    pac(j) = 0.0;
+  }
+}
+
+// One (node, face) pair with effective contact area A (0: not in contact): normal penalty (no
+// tension), incremental shear spring with Coulomb friction and cohesion (coulomb_shear); forces
+// added to the node and, through the contact point's barycentric weights, to the face's nodes;
+// history updated. Rule: no energy from nowhere: a starting contact gets only the depth its
+// approach explains beyond `limit` (allowance g0), a growing one only the energy in `budget`,
+// and what the shear spring loses is dissipated (why and how: docs/theory.md section 6b).
+// Fric = false: frictionless contact (mu = 0 and no cohesion): the shear force is zero, so the
+// shear spring is neither computed nor stored (its history stays zero; see ContactSystem::update
+// for the switch from friction to none).
+template <int D, bool Fric = true, class Force>
+KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
+                                         const Kokkos::View<double* [D]>& v,
+                                         const Force& f, const Kokkos::View<double*>& pfn,
+                                         const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
+                                         const Kokkos::View<double* [D]>& pfs, int j, int s, int fc,
+                                         const double (&xs)[D], const double (&vs)[D], double A, double limit,
+                                         double budget, double dt, ContactSums& sums) {
+  const bool was = pfn(j) > 0.0;
+  double g0 = pg0(j);
+  if (!(A > 0.0) && !(was || g0 < 0.0)) return;  // not in contact, nothing to update
+  double n[D], N[D];
+  const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
+  double Nc[D], nsum = 0;
+  for (int q = 0; q < D; ++q) {
+    Nc[q] = kclamp(N[q], 0.0, 1.0);
+    nsum += Nc[q];
+  }
+  // relative displacement of the node against the contact point over the last step
+  double du[D], du2 = 0;
+  for (int k = 0; k < D; ++k) {
+    double vf = 0;
+    for (int q = 0; q < D; ++q) vf += Nc[q] / nsum * v(S.fnode(fc, q), k);
+    du[k] = (vs[k] - vf) * dt;
+    du2 += du[k] * du[k];
+  }
+  for (int q = 0; q < D; ++q) Nc[q] /= nsum;
+  if (A > 0.0 && !was) {  // a contact starts: depth beyond what the approach explains is allowed
+    const double allowed = limit + 2.0 * kmath::sqrt(du2);
+    if (g - g0 < -allowed) g0 = g + allowed;
+  }
+  if (A > pac(j) && was && g - g0 < 0.0) {  // the area grew: energy only from the budget
+    const double ge = g - g0;
+    const double Aok = pac(j) + 2.0 * budget / (L.kn * ge * ge);
+    if (A > Aok) g0 = g - ge * kmath::sqrt(Aok / A);
+  }
+  if (!(A > 0.0) || !(g - g0 < 0.0)) {  // no contact (any more)
+    contact_open<D, Fric>(L, pfn, pac, pg0, pfs, j, g, g0, was, du, sums);
+    return;
+  }
+  pg0(j) = g0;
+  const double Fn = -L.kn * A * (g - g0);
+  double Fs[D];
+  for (int k = 0; k < D; ++k) Fs[k] = 0.0;
+  if constexpr (Fric) {
+    // the last step's shear spring in this step's tangent plane, scaled to this step's area
+    const double scale = was && A < pac(j) ? A / pac(j) : 1.0;
+    double fs[D], dun = 0, fsn = 0, f2old = 0;
+    for (int k = 0; k < D; ++k) {
+      dun += du[k] * n[k];
+      fs[k] = was ? pfs(j, k) * scale : 0.0;
+      f2old += was ? pfs(j, k) * pfs(j, k) : 0.0;
+      fsn += fs[k] * n[k];
+    }
+    const ShearStep<D> sh = coulomb_shear<D>(L, n, A, Fn, fs, fsn, du, dun);
+    if (was) sums.dissipated += 0.5 * (f2old / pac(j) - sh.f2 / A) / L.ks;
+    if (sh.slipped) sums.dissipated += sh.slip;
+    for (int k = 0; k < D; ++k) Fs[k] = sh.Fs[k];
+  }
+  for (int k = 0; k < D; ++k) {
+    const double Fk = Fn * n[k] + Fs[k];
+    f(s, k) += Fk;
+    for (int q = 0; q < D; ++q) f(S.fnode(fc, q), k) += -Nc[q] * Fk;
+    if constexpr (Fric) pfs(j, k) = Fs[k];
+  }
+  pfn(j) = Fn;
+  pac(j) = A;
+  sums.active += 1.0;
+}
+
+// The narrow-phase pass over one surface node's candidates (see contact_forces): the weight of
+// every pair (weigh, share), what the weight changes release (release), then the contacts.
+// Scratch per pair: g gap, phi fade (< 0: a free element's face), n normal, w weight, depth the
+// depth at the last step, rel the energy released.
+template <int D, bool Fric>
+struct ContactForcesFn {
+  Kokkos::View<double* [D]> x, v, xbuild;
+  ForceScatter<D> scatter;
+  Kokkos::View<int*> pts;
+  PairList<D> P;
+  PairScratch<D> scr;
+  ContactSurface<D> S;
+  ContactLaw L;
+  double dt;
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const {
+    auto f = scatter.access();
+    const int s = pts(i);
+    double xs[D], vs[D], d2 = 0, v2 = 0;
+    for (int k = 0; k < D; ++k) {
+      xs[k] = x(s, k);
+      vs[k] = v(s, k);
+      d2 += (xs[k] - xbuild(s, k)) * (xs[k] - xbuild(s, k));
+      v2 += vs[k] * vs[k];
+    }
+    sums.d2max = d2 > sums.d2max ? d2 : sums.d2max;
+    sums.v2max = v2 > sums.v2max ? v2 : sums.v2max;
+    const int b = P.off(s), e = P.off(s + 1);
+    if (b == e) return;
+    const double Anode = S.narea(s);
+    weigh(s, b, e, xs);
+    share(b, e);
+    release(b, e, Anode);
+    contacts(f, s, b, e, xs, vs, Anode, sums);
+  }
+
+  // 0. the depth of each contact at the last step (for the allowance of contacts that start)
+  // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's).
+  //    Free elements (a node's candidates are sorted by element: the depth is computed
+  //    once per element): weight 1 through the nearest face when the node is inside. Other
+  //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
+  KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D]) const {
+    for (int j = b; j < e; ++j)
+      scr.depth(j) = P.fn(j) > 0.0 ? P.fn(j) / (L.kn * kmath::sqrt(P.ac(j))) : -1.0;
+    int last_e = -1, last_a = -1;
+    double last_d = 0.0;
+    for (int j = b; j < e; ++j) {
+      const int fc = P.face(j);
+      const int own = S.fowner(fc);
+      double n[D], N[D];
+      const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
+      scr.g(j) = g;
+      if (S.efree(own)) {  // a free element: contact through its nearest face, if inside
+        if (own != last_e) {
+          last_e = own;
+          const ElementDepth ed = element_depth<D>(S, own, xs);
+          last_d = ed.depth;
+          last_a = ed.nearest;
+        }
+        bool mine = last_d > 0.0 && last_d < L.dpen;
+        for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
+        scr.w(j) = mine ? 1.0 : 0.0;
+        scr.phi(j) = -1.0;
+        continue;
+      }
+      double score = N[0];
+      for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
+      const bool near = g > -L.dpen && g < L.dpen;
+      double phi = near ? contact_fade(score, L.tol) : 0.0;
+      if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
+      scr.phi(j) = phi;
+      for (int k = 0; k < D; ++k) scr.n(j, k) = n[k];
+    }
+  }
+
+  // 2. the other faces: each penetrated near face is a contact, its weight shared among the near
+  //    coplanar faces of its piece
+  KOKKOS_INLINE_FUNCTION void share(int b, int e) const {
+    for (int j = b; j < e; ++j) {
+      if (scr.phi(j) < 0.0) continue;
+      const int fc = P.face(j);
+      double w = 0.0;
+      if (scr.g(j) < 0.0 && scr.phi(j) > 0.0) {
+        double sum = 0;
+        for (int jj = b; jj < e; ++jj) {
+          if (!(scr.phi(jj) > 0.0)) continue;
+          if (jj != j) {
+            double d = 0;
+            for (int k = 0; k < D; ++k) d += scr.n(j, k) * scr.n(jj, k);
+            if (!(d > L.cos_same) || !same_piece<D>(S, fc, P.face(jj))) continue;
+          }
+          sum += scr.phi(jj);
+        }
+        w = scr.phi(j) / (sum > 1.0 ? sum : 1.0);
+      }
+      scr.w(j) = w;
+    }
+  }
+
+  // 3. what the weight changes release (the budget of rising ones, step 4)
+  KOKKOS_INLINE_FUNCTION void release(int b, int e, double Anode) const {
+    for (int j = b; j < e; ++j) {
+      const double ge = scr.g(j) - P.g0(j), Aw = Anode * scr.w(j);
+      scr.rel(j) =
+          P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
+    }
+  }
+
+  // 4. the contacts; the energy a contact released as its weight fell may go to a related one
+  //    whose weight rises (a node moving from one face of a piece onto the next)
+  template <class Force>
+  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, int b, int e, const double (&xs)[D],
+                                       const double (&vs)[D], double Anode, ContactSums& sums) const {
+    for (int j = b; j < e; ++j) {
+      const int fc = P.face(j);
+      const double w = scr.w(j);
+      const double lim = w > 0.0 && !(scr.depth(j) >= 0.0)
+                             ? related_depth<D>(S, P.face, scr.depth, b, e, fc) / kmath::sqrt(Anode * w)
+                             : 0.0;
+      double budget = 0.0;
+      if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j))
+        for (int jj = b; jj < e; ++jj)
+          if (jj != j && scr.rel(jj) > 0.0 && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
+      contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
+                            sums);
+    }
+  }
+};
+
+// Contact forces of all surface nodes `points` against their candidate faces; adds them to m.f
+// with atomics and updates the pair history. dt: the step (relative displacement increments are
+// v(n-1/2) dt, as for the platens). xb: positions at the last build.
+//
+// Against a free element (a fragment that is one element) the node is in contact through the
+// element's nearest face when it lies inside (element_depth). Against any other face, each face
+// that the node penetrates (-dpen < g < 0) is a contact of its own (a node may touch several
+// pieces), with the effective area A w: A the node's contact area, w the fade at the face's edge
+// (contact_fade), shared among coplanar faces of one piece so that they form a partition of
+// unity where they meet. Both vary continuously with the positions, so contacts begin and end
+// without jumps in the stored energy. Fric: see contact_pair.
+// The forces go into the scatter view sf (the force kernel's, not contributed yet: the same
+// copies on host backends, so that the sums do not depend on the order the threads add in and a
+// run with T threads repeats itself bit for bit; atomics on GPUs).
+template <int D, bool Fric = true>
+ContactSums contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np,
+                           const PairList<D>& P, const PairScratch<D>& scratch,
+                           const ContactSurface<D>& surf, const ContactLaw& law, double dt,
+                           const Kokkos::View<double* [D]>& xb,
+                           const ForceScatter<D>& sf) {
+  const ContactForcesFn<D, Fric> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt};
+  ContactSums out;
+  Kokkos::parallel_reduce("fdem::contact::forces", Kokkos::RangePolicy<ExecSpace>(0, np), fn, out);
+  return out;
+}
+
+// Elastic energy of the contact springs (normal and shear) at the last narrow-phase pass.
+template <int D>
+double contact_energy(const PairList<D>& P, const Kokkos::View<int*>& points, int np, const ContactLaw& law) {
+  auto off = P.off;
+  auto pfn = P.fn;
+  auto pac = P.ac;
+  auto pfs = P.fs;
+  auto pts = points;
+  const double kn = law.kn, ks = law.ks;
+  double e = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::energy", Kokkos::RangePolicy<ExecSpace>(0, np),
+      KOKKOS_LAMBDA(const int i, double& sum) {
+        const int s = pts(i);
+        for (int j = off(s); j < off(s + 1); ++j) {
+          if (!(pfn(j) > 0)) continue;
+          double f2 = 0;
+          for (int k = 0; k < D; ++k) f2 += pfs(j, k) * pfs(j, k);
+          sum += 0.5 * (pfn(j) * pfn(j) / kn + f2 / ks) / pac(j);
+        }
+      },
+      e);
+  return e;
+}
+
+}  // namespace fdem
+
+namespace Kokkos {
+template <>
+struct reduction_identity<fdem::ContactSums> {
+  KOKKOS_FORCEINLINE_FUNCTION static fdem::ContactSums sum() { return fdem::ContactSums(); }
+};
+}  // namespace Kokkos

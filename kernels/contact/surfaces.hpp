@@ -1,0 +1,268 @@
+#pragma once
+// Contact surfaces (docs/theory.md section 6b): which faces are surfaces, the vertex clusters
+// that tell one piece from two, the surface nodes and their contact areas, the per-step geometry
+// of the active faces and of the free elements, and the handover of failed interfaces to contact.
+//
+// Surfaces are faces (2D: edges, 3D: triangles) with their outward normal: the outer boundary of
+// every body, and both faces of every failed interface once it is handed over. Every node of an
+// active face is a "surface node".
+#include "kernels/contact/geometry.hpp"
+#include "kernels/step.hpp"
+
+namespace fdem {
+
+// Vertex groups that have interface node pairs (CSR, from the mesh): the entries q * D + k of
+// group g's interface node pairs are ent(off(g)) .. ent(off(g + 1) - 1), its copies (node ids)
+// copy(copy_off(g)) .. copy(copy_off(g + 1) - 1).
+struct VertexGroups {
+  Kokkos::View<int*> off, ent, copy_off, copy;
+  int n = 0;
+};
+
+// Surface data the narrow phase needs: face nodes and each node's share of the reference face
+// measure (thickness included), which faces are active, the faces around each node (CSR), each
+// node's contact area (half its share of its active faces: both sides of a contact carry half),
+// the interface of each face (-1: outer boundary; faces nb + 2q and nb + 2q + 1 are the two
+// faces of interface q) and the vertex groups/clusters (see PairFilter).
+template <int D>
+struct ContactSurface {
+  Kokkos::View<int* [D + 1]> elem;  // the model's elements
+  Kokkos::View<int*> fowner;         // element of each face
+  Kokkos::View<int*> efree;          // 1: every face of the element is active (a free piece)
+  // planes of the faces of free elements at the current positions (element_planes): for the
+  // face opposite vertex a, the outward unit normal (0..D-1) and its offset n . x (D)
+  Kokkos::View<double* [D + 1][D + 1]> eplane;
+  Kokkos::View<int* [D]> fnode;
+  Kokkos::View<double*> fshare;  // measure / D
+  Kokkos::View<int*> factive;
+  Kokkos::View<int*> nfoff, nface;
+  Kokkos::View<double*> narea;
+  Kokkos::View<int*> fiface;
+  int nb = 0;
+  Kokkos::View<int*> vgrp, clus;
+  // geometry of the active faces at the current positions (face_geometry): row fslot(f) for an
+  // active face f (its place in the list of active faces), FaceGeo<D>::size values each
+  Kokkos::View<int*> fslot;
+  Kokkos::View<double**> fgeo;
+};
+
+// The geometry of every active face at the current positions (see FaceGeo), once per step.
+template <int D>
+void face_geometry(const Kokkos::View<double* [D]>& x, const ContactSurface<D>& surf,
+                   const Kokkos::View<int*>& afaces, int na) {
+  auto xx = x;
+  auto fnode = surf.fnode;
+  auto geo = surf.fgeo;
+  auto af = afaces;
+  Kokkos::parallel_for(
+      "fdem::contact::face_geometry", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
+        const int f = af(i);
+        double xf[D][D];
+        for (int a = 0; a < D; ++a)
+          for (int k = 0; k < D; ++k) xf[a][k] = xx(fnode(f, a), k);
+        face_geometry_of<D>(xf, geo, i);
+      });
+}
+
+// Planes of the faces of the free elements at the current positions (see element_depth).
+template <int D>
+void element_planes(const Kokkos::View<double* [D]>& x, const ContactSurface<D>& surf, int ne) {
+  auto xx = x;
+  auto elem = surf.elem;
+  auto efree = surf.efree;
+  auto eplane = surf.eplane;
+  Kokkos::parallel_for(
+      "fdem::contact::element_planes", Kokkos::RangePolicy<ExecSpace>(0, ne), KOKKOS_LAMBDA(const int e) {
+        if (!efree(e)) return;
+        double xe[D + 1][D];
+        for (int a = 0; a <= D; ++a)
+          for (int k = 0; k < D; ++k) xe[a][k] = xx(elem(e, a), k);
+        for (int a = 0; a <= D; ++a) {
+          double xf[D][D], n[D];
+          int c = 0;
+          for (int b = 0; b <= D; ++b)
+            if (b != a) {
+              for (int k = 0; k < D; ++k) xf[c][k] = xe[b][k];
+              ++c;
+            }
+          face_normal<D>(xf, n);
+          double side = 0;
+          for (int k = 0; k < D; ++k) side += (xe[a][k] - xf[0][k]) * n[k];
+          const double sg = side < 0 ? 1.0 : -1.0;  // outward: away from vertex a
+          double off = 0;
+          for (int k = 0; k < D; ++k) {
+            eplane(e, a, k) = sg * n[k];
+            off += sg * n[k] * xf[0][k];
+          }
+          eplane(e, a, D) = off;
+        }
+      });
+}
+
+// Active faces: the outer boundary, and both faces of every handed-over interface.
+template <int D>
+void activate_faces(const ContactSurface<D>& surf, const Kokkos::View<int*>& icontact_in, int nf) {
+  auto factive = surf.factive;
+  auto fiface = surf.fiface;
+  auto icontact = icontact_in;
+  Kokkos::parallel_for(
+      "fdem::contact::factive", Kokkos::RangePolicy<ExecSpace>(0, nf), KOKKOS_LAMBDA(const int f) {
+        const int q = fiface(f);
+        factive(f) = q < 0 ? 1 : (icontact(q) ? 1 : 0);
+      });
+}
+
+// Clusters: within each vertex group, copies joined by intact interface pairs share the smallest
+// node id (surf.clus).
+template <int D>
+void update_clusters(const VertexGroups& G, const ContactSurface<D>& surf,
+                     const Kokkos::View<int* [2 * D]>& iface_in, const Kokkos::View<int*>& icontact_in) {
+  if (G.n == 0) return;
+  auto goff = G.off;
+  auto gent = G.ent;
+  auto gcoff = G.copy_off;
+  auto gcopy = G.copy;
+  auto clus = surf.clus;
+  auto iface = iface_in;
+  auto icontact = icontact_in;
+  Kokkos::parallel_for(
+      "fdem::contact::clusters", Kokkos::RangePolicy<ExecSpace>(0, G.n), KOKKOS_LAMBDA(const int g) {
+        for (int c = gcoff(g); c < gcoff(g + 1); ++c) clus(gcopy(c)) = gcopy(c);
+        bool changed = true;
+        while (changed) {
+          changed = false;
+          for (int t = goff(g); t < goff(g + 1); ++t) {
+            const int q = gent(t) / D, k = gent(t) % D;
+            if (icontact(q)) continue;
+            const int a = iface(q, k), b = iface(q, D + k);
+            const int ca = clus(a), cb = clus(b);
+            if (ca != cb) {
+              const int lo = ca < cb ? ca : cb;
+              clus(a) = lo;
+              clus(b) = lo;
+              changed = true;
+            }
+          }
+        }
+      });
+}
+
+// The indices i < n with flag(i) != 0, in order, into out (a compact list); returns their number.
+inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag_in,
+                           const Kokkos::View<int*>& out_in, int n) {
+  auto flag = flag_in;
+  auto out = out_in;
+  int count = 0;
+  Kokkos::parallel_scan(
+      label, Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i, int& upd, const bool final) {
+        if (flag(i)) {
+          if (final) out(upd) = i;
+          ++upd;
+        }
+      },
+      count);
+  return count;
+}
+
+// The row of each active face in surf.fgeo (its place in the list of active faces).
+template <int D>
+void face_slots(const ContactSurface<D>& surf, const Kokkos::View<int*>& afaces_in, int na) {
+  auto fslot = surf.fslot;
+  auto afaces = afaces_in;
+  Kokkos::parallel_for(
+      "fdem::contact::face_slots", Kokkos::RangePolicy<ExecSpace>(0, na),
+      KOKKOS_LAMBDA(const int i) { fslot(afaces(i)) = i; });
+}
+
+// mark(i) = 1 for the nodes of the active faces, 0 for all others.
+template <int D>
+void mark_surface_nodes(const ContactSurface<D>& surf, const Kokkos::View<int*>& afaces_in, int na,
+                        const Kokkos::View<int*>& mark_in) {
+  auto mark = mark_in;
+  auto afaces = afaces_in;
+  auto fnode = surf.fnode;
+  Kokkos::deep_copy(mark, 0);
+  Kokkos::parallel_for(
+      "fdem::contact::mark_nodes", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
+        for (int a = 0; a < D; ++a) Kokkos::atomic_exchange(&mark(fnode(afaces(i), a)), 1);
+      });
+}
+
+// Free elements (all D + 1 faces active: a fragment that is one element) into surf.efree;
+// returns their number.
+template <int D>
+int flag_free_elements(const ContactSurface<D>& surf, const Kokkos::View<int*>& afaces_in, int na, int ne) {
+  auto efree = surf.efree;
+  auto fowner = surf.fowner;
+  auto afaces = afaces_in;
+  Kokkos::deep_copy(efree, 0);
+  Kokkos::parallel_for(
+      "fdem::contact::free_count", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
+        Kokkos::atomic_add(&efree(fowner(afaces(i))), 1);
+      });
+  int nfree = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::free_flag", Kokkos::RangePolicy<ExecSpace>(0, ne),
+      KOKKOS_LAMBDA(const int e, int& cnt) {
+        efree(e) = efree(e) == D + 1 ? 1 : 0;
+        cnt += efree(e);
+      },
+      nfree);
+  return nfree;
+}
+
+// Contact area of each node (surf.narea): half its share of its active faces, summed per node
+// over its faces in a fixed order (the same sums whatever the threads).
+template <int D>
+void node_areas(const ContactSurface<D>& surf, int nn) {
+  auto narea = surf.narea;
+  auto fshare = surf.fshare;
+  auto factive = surf.factive;
+  auto nfoff = surf.nfoff;
+  auto nface = surf.nface;
+  Kokkos::parallel_for(
+      "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
+        double a = 0.0;
+        for (int j = nfoff(i); j < nfoff(i + 1); ++j)
+          if (factive(nface(j))) a += 0.5 * fshare(nface(j));
+        narea(i) = a;
+      });
+}
+
+// Hands every failed interface (damage 1 at all its points) that has parted or come apart over
+// to contact (m.icontact(q) = 1); ni: the number of interfaces. Returns how many.
+template <int D>
+int hand_over_failed(const Model<D>& m, int ni) {
+  auto icontact = m.icontact;
+  auto ihist = m.ihist;
+  auto iface = m.iface;
+  auto x = m.x;
+  const double slip = m.handover_slip;
+  int n = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::handover", Kokkos::RangePolicy<ExecSpace>(0, ni),
+      KOKKOS_LAMBDA(const int q, int& cnt) {
+        if (icontact(q)) return;
+        bool all = true;
+        for (int k = 0; k < D; ++k)
+          all = all && cohesive_damage(load_point(ihist, q, k)) >= 1.0;
+        if (!all) return;
+        double xa[D][D], xb[D][D];
+        for (int k = 0; k < D; ++k)
+          for (int i = 0; i < D; ++i) {
+            xa[k][i] = x(iface(q, k), i);
+            xb[k][i] = x(iface(q, D + k), i);
+          }
+        CohesivePoint h[D];
+        for (int k = 0; k < D; ++k) h[k] = load_point(ihist, q, k);
+        if (interface_parted<D>(xa, xb, slip) || interface_apart<D>(xa, xb, h)) {
+          icontact(q) = 1;
+          ++cnt;
+        }
+      },
+      n);
+  return n;
+}
+
+}  // namespace fdem

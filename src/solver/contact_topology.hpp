@@ -1,0 +1,51 @@
+#pragma once
+// Host topology of the contact surfaces, from the mesh (docs/theory.md section 6b), computed once
+// by the ContactSystem constructor (solver/contact_system.cpp): the faces that can become
+// surfaces, with their nodes, owner elements and interfaces; each face's share of its nodes'
+// areas; the vertex groups of the copies of one mesh vertex; the number of bodies.
+#include <vector>
+
+#include "io/case.hpp"
+#include "mesh/mesh.hpp"
+
+namespace fdem {
+
+// Faces: the outer boundary (nb of them), then both faces of each interface: nodes (D per face;
+// the interface's side A in its stored order, side B reversed: both normals point out of their
+// element), owner element, interface (-1 on the outer boundary).
+struct ContactFaces {
+  int nb = 0, nf = 0;
+  std::vector<int> fnode, fowner, fiface;
+};
+
+// Each face's share of its nodes' areas (measure / D, thickness included), the faces around each
+// node (CSR: nface(nfoff(i)) .. nface(nfoff(i + 1) - 1)), and each node's share of every face it
+// can ever be part of.
+struct FaceShares {
+  std::vector<double> share;
+  std::vector<int> nfoff, nface;
+  std::vector<double> area;
+};
+
+// Vertex groups (copies of one mesh vertex joined through interface node pairs): each node's
+// group id (vgrp), and the groups that have interface pairs (CSR, see VertexGroups in
+// kernels/contact/surfaces.hpp).
+struct HostVertexGroups {
+  std::vector<int> vgrp, off, ent, copy_off, copy;
+  int n = 0;
+};
+
+// Connected pieces of the mesh: elements joined by shared nodes or by interfaces.
+int count_bodies(const HostMesh& mesh);
+
+// The faces (InputError, naming c.file, when a face has no element).
+template <int D>
+ContactFaces contact_faces(const Case& c, const HostMesh& mesh);
+
+template <int D>
+FaceShares face_shares(const HostMesh& mesh, const ContactFaces& F, double thick);
+
+template <int D>
+HostVertexGroups vertex_groups(const HostMesh& mesh);
+
+}  // namespace fdem
