@@ -2,6 +2,7 @@
 // Rigid platens (docs/theory.md section 6): their forces on the boundary nodes, the elastic energy
 // of their springs, and the growth of a node's platen area when faces around it become contact
 // surfaces. The accumulator columns of Model::platen_acc are named in kernels/model.hpp.
+#include "kernels/friction.hpp"
 #include "kernels/model.hpp"
 
 namespace fdem {
@@ -29,10 +30,8 @@ struct PlatenKernel {
       du[k] = (v(i, k) - P.vel[k]) * dt;
       dun += du[k] * P.n[k];
     }
-    // Friction is booked as in contact_pair (kernels/contact.hpp): the shear spring's
-    // energy before minus after, plus the work of du against the mean of the old and new
-    // shear forces (zero while sticking, the leap-frog's work while slipping); a contact
-    // that ends releases its spring's energy and the work of its last half step.
+    // The shear spring follows the Coulomb law shared with contact (kernels/friction.hpp); a
+    // contact that ends releases its spring's energy and the work of its last half step.
     // gap from the allowance g0 (<= 0, grow_platen_areas), which follows the
     // node out while it is shallower
     if (g >= g0(p, i)) g0(p, i) = g < 0.0 ? g : 0.0;
@@ -48,25 +47,14 @@ struct PlatenKernel {
       return;
     }
     const double Fn = -P.kn * A * g;
-    double fs0[D], Fs[D], fsn = 0, Fs2 = 0, f2old = 0;
-    for (int k = 0; k < D; ++k) fsn += fs(p, i, k) * P.n[k];
+    double fsp[D], fsn = 0;
     for (int k = 0; k < D; ++k) {
-      fs0[k] = fs(p, i, k) - fsn * P.n[k];
-      f2old += fs0[k] * fs0[k];
-      Fs[k] = fs0[k] - P.ks * A * (du[k] - dun * P.n[k]);
-      Fs2 += Fs[k] * Fs[k];
+      fsp[k] = fs(p, i, k);
+      fsn += fsp[k] * P.n[k];
     }
-    const double lim = P.mu * Fn + P.coh * A;
-    const double Fsm = kmath::sqrt(Fs2);
-    if (Fsm > lim) {
-      const double r = Fsm > 0 ? lim / Fsm : 0.0;
-      double w = 0;
-      for (int k = 0; k < D; ++k) {
-        Fs[k] *= r;
-        w += (fs0[k] + Fs[k]) * du[k];
-      }
-      Kokkos::atomic_add(&acc(p, kPlatenFriction), 0.5 * (f2old - lim * lim) / (P.ks * A) - 0.5 * w);
-    }
+    const ShearStep<D> sh = coulomb_shear<D>(P, P.n, A, Fn, fsp, fsn, du, dun);
+    if (sh.slipped) Kokkos::atomic_add(&acc(p, kPlatenFriction), sh.slip);
+    const double(&Fs)[D] = sh.Fs;
     double work = 0;
     for (int k = 0; k < D; ++k) {
       const double Fk = Fn * P.n[k] + Fs[k];

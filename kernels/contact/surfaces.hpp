@@ -7,7 +7,7 @@
 // every body, and both faces of every failed interface once it is handed over. Every node of an
 // active face is a "surface node".
 #include "kernels/contact/geometry.hpp"
-#include "kernels/step.hpp"
+#include "kernels/interface.hpp"
 
 namespace fdem {
 
