@@ -23,7 +23,9 @@ namespace fdem {
 
 using namespace mesh_detail;
 
-void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
+namespace {
+
+void check_insertion_args(const HostMesh& mesh, const std::vector<bool>& fracturable) {
   const int dim = mesh.dim;
   if (dim != 2 && dim != 3) throw InputError("insert_interfaces: mesh dimension must be 2 or 3");
   if (!mesh.ifaces.empty() || !mesh.iface_elems.empty())
@@ -32,15 +34,17 @@ void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
     throw InputError("insert_interfaces: " + std::to_string(fracturable.size()) +
                      " fracturable flags for " + std::to_string(mesh.region_names.size()) +
                      " regions");
-  const int npe = dim + 1;
-  const int ne = mesh.num_elems();
-  const int nn = mesh.num_nodes();
   for (int r : mesh.elem_region)
     if (r < 0 || r >= static_cast<int>(fracturable.size()))
       throw InputError("insert_interfaces: element region index out of range");
-  auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
+}
 
-  // --- Neighbours across faces (by original node ids).
+// Neighbours across faces (by original node ids): neighbour[e * (dim + 1) + f] is the element on
+// the other side of local face f of element e, -1 on the boundary.
+std::vector<int> face_neighbours(const HostMesh& mesh) {
+  const int dim = mesh.dim;
+  const int npe = dim + 1;
+  const int ne = mesh.num_elems();
   struct Entry {
     std::array<int, 3> key;
     int elem, face;
@@ -75,14 +79,20 @@ void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
     }
     i = j;
   }
+  return neighbour;
+}
 
-  // --- New nodes, element by element.
-  std::vector<int> shared(nn, -1);  // original -> new id for nodes of non-fracturable elements
-  std::vector<int> new_elems(mesh.elems.size());
-  std::vector<int> origin;  // new -> original (pre-insertion) id
+// New nodes, element by element: new_elems is the new connectivity, origin[new] the original
+// (pre-insertion) id.
+void split_nodes(const HostMesh& mesh, const std::vector<bool>& fracturable, std::vector<int>& new_elems,
+                 std::vector<int>& origin) {
+  const int npe = mesh.dim + 1;
+  const int ne = mesh.num_elems();
+  std::vector<int> shared(mesh.num_nodes(), -1);  // original -> new id for nodes of non-fracturable elements
+  new_elems.resize(mesh.elems.size());
   origin.reserve(static_cast<std::size_t>(ne) * npe);
   for (int e = 0; e < ne; ++e) {
-    const bool fe = frac(e);
+    const bool fe = fracturable[mesh.elem_region[e]];
     for (int a = 0; a < npe; ++a) {
       const std::size_t s = static_cast<std::size_t>(e) * npe + a;
       const int o = mesh.elems[s];
@@ -98,10 +108,16 @@ void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
       }
     }
   }
-  const int nn_new = static_cast<int>(origin.size());
+}
 
-  // --- Interfaces: for each element in order, faces towards higher-index neighbours.
-  std::vector<int> ifaces, iface_elems;
+// Interfaces: for each element in order, faces towards higher-index neighbours.
+void build_interfaces(const HostMesh& mesh, const std::vector<bool>& fracturable,
+                      const std::vector<int>& neighbour, const std::vector<int>& new_elems,
+                      std::vector<int>& ifaces, std::vector<int>& iface_elems) {
+  const int dim = mesh.dim;
+  const int npe = dim + 1;
+  const int ne = mesh.num_elems();
+  auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
       const int b = neighbour[static_cast<std::size_t>(e) * npe + f];
@@ -122,12 +138,12 @@ void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
       iface_elems.push_back(e);
       iface_elems.push_back(b);
     }
+}
 
-  // --- Coordinates, node sets, origins.
-  std::vector<double> X(static_cast<std::size_t>(nn_new) * dim);
-  for (int n = 0; n < nn_new; ++n)
-    for (int k = 0; k < dim; ++k)
-      X[static_cast<std::size_t>(n) * dim + k] = mesh.X[static_cast<std::size_t>(origin[n]) * dim + k];
+// Every node set holds all copies of its original nodes (sorted, unique).
+void remap_node_sets(HostMesh& mesh, const std::vector<int>& origin) {
+  const int nn = mesh.num_nodes();
+  const int nn_new = static_cast<int>(origin.size());
   // copies of each original node (CSR)
   std::vector<int> start(nn + 1, 0);
   for (int n = 0; n < nn_new; ++n) ++start[origin[n] + 1];
@@ -144,6 +160,27 @@ void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
     out.erase(std::unique(out.begin(), out.end()), out.end());
     set.swap(out);
   }
+}
+
+}  // namespace
+
+void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
+  check_insertion_args(mesh, fracturable);
+  const int dim = mesh.dim;
+  const int nn = mesh.num_nodes();
+  const std::vector<int> neighbour = face_neighbours(mesh);
+  std::vector<int> new_elems, origin;
+  split_nodes(mesh, fracturable, new_elems, origin);
+  const int nn_new = static_cast<int>(origin.size());
+  std::vector<int> ifaces, iface_elems;
+  build_interfaces(mesh, fracturable, neighbour, new_elems, ifaces, iface_elems);
+
+  // Coordinates, node sets, origins.
+  std::vector<double> X(static_cast<std::size_t>(nn_new) * dim);
+  for (int n = 0; n < nn_new; ++n)
+    for (int k = 0; k < dim; ++k)
+      X[static_cast<std::size_t>(n) * dim + k] = mesh.X[static_cast<std::size_t>(origin[n]) * dim + k];
+  remap_node_sets(mesh, origin);
   const bool had_origin = mesh.node_origin.size() == static_cast<std::size_t>(nn);
   std::vector<int> node_origin(nn_new);
   for (int n = 0; n < nn_new; ++n) node_origin[n] = had_origin ? mesh.node_origin[origin[n]] : origin[n];

@@ -1,4 +1,5 @@
-// Mesh module: element checks, quality, boundary faces, locality reordering, build_mesh dispatch.
+// Mesh module: element checks, quality, boundary faces, build_mesh dispatch (locality reordering:
+// locality.cpp).
 #include "mesh/mesh.hpp"
 
 #include <algorithm>
@@ -160,6 +161,51 @@ double norm(const std::array<double, 3>& u) {
   return std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
 }
 
+// Triangle with nodes n and signed area `meas`: lowers min_angle_deg by its interior angles and
+// returns its shortest altitude (2 A / longest edge).
+double triangle_angles(const HostMesh& mesh, const int* n, double meas, double lmax, double pi,
+                       double& min_angle_deg) {
+  const double hmin = 2.0 * std::abs(meas) / lmax;
+  for (int a = 0; a < 3; ++a) {
+    const double* p = &mesh.X[2 * static_cast<std::size_t>(n[a])];
+    const double* p1 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 1) % 3])];
+    const double* p2 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 2) % 3])];
+    const double ux = p1[0] - p[0], uy = p1[1] - p[1];
+    const double vx = p2[0] - p[0], vy = p2[1] - p[1];
+    const double ang = std::atan2(std::abs(ux * vy - uy * vx), ux * vx + uy * vy);
+    min_angle_deg = std::min(min_angle_deg, ang * 180.0 / pi);
+  }
+  return hmin;
+}
+
+// Tetrahedron with nodes n and signed volume `meas`: lowers min_angle_deg by its dihedral angles
+// and returns its shortest altitude (3 V / largest face area).
+double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, double pi,
+                          double& min_angle_deg) {
+  // outward face normals (area-weighted) from the local face table
+  std::array<std::array<double, 3>, 4> nf;
+  double amax = 0;
+  for (int f = 0; f < 4; ++f) {
+    const double* x0 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][0]])];
+    const double* x1 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][1]])];
+    const double* x2 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][2]])];
+    const std::array<double, 3> u{x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2]};
+    const std::array<double, 3> v{x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2]};
+    nf[f] = cross(u, v);
+    amax = std::max(amax, 0.5 * norm(nf[f]));
+  }
+  const double hmin = amax > 0 ? 3.0 * std::abs(meas) / amax : 0.0;
+  for (int f = 0; f < 4; ++f)
+    for (int g = f + 1; g < 4; ++g) {
+      const double nn = norm(nf[f]) * norm(nf[g]);
+      double c = nn > 0 ? (nf[f][0] * nf[g][0] + nf[f][1] * nf[g][1] + nf[f][2] * nf[g][2]) / nn : 1.0;
+      c = std::max(-1.0, std::min(1.0, c));
+      const double dihedral = pi - std::acos(c);
+      min_angle_deg = std::min(min_angle_deg, dihedral * 180.0 / pi);
+    }
+  return hmin;
+}
+
 }  // namespace
 
 MeshQuality mesh_quality(const HostMesh& mesh) {
@@ -188,43 +234,8 @@ MeshQuality mesh_quality(const HostMesh& mesh) {
         edge_sum += l;
         ++edge_count;
       }
-    double hmin;
-    if (dim == 2) {
-      // shortest altitude = 2 A / longest edge
-      hmin = 2.0 * std::abs(meas) / lmax;
-      for (int a = 0; a < 3; ++a) {
-        const double* p = &mesh.X[2 * static_cast<std::size_t>(n[a])];
-        const double* p1 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 1) % 3])];
-        const double* p2 = &mesh.X[2 * static_cast<std::size_t>(n[(a + 2) % 3])];
-        const double ux = p1[0] - p[0], uy = p1[1] - p[1];
-        const double vx = p2[0] - p[0], vy = p2[1] - p[1];
-        const double ang = std::atan2(std::abs(ux * vy - uy * vx), ux * vx + uy * vy);
-        q.min_angle_deg = std::min(q.min_angle_deg, ang * 180.0 / pi);
-      }
-    } else {
-      // outward face normals (area-weighted) from the local face table
-      std::array<std::array<double, 3>, 4> nf;
-      double amax = 0;
-      for (int f = 0; f < 4; ++f) {
-        const double* x0 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][0]])];
-        const double* x1 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][1]])];
-        const double* x2 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][2]])];
-        const std::array<double, 3> u{x1[0] - x0[0], x1[1] - x0[1], x1[2] - x0[2]};
-        const std::array<double, 3> v{x2[0] - x0[0], x2[1] - x0[1], x2[2] - x0[2]};
-        nf[f] = cross(u, v);
-        amax = std::max(amax, 0.5 * norm(nf[f]));
-      }
-      hmin = amax > 0 ? 3.0 * std::abs(meas) / amax : 0.0;
-      for (int f = 0; f < 4; ++f)
-        for (int g = f + 1; g < 4; ++g) {
-          const double nn = norm(nf[f]) * norm(nf[g]);
-          double c = nn > 0 ? (nf[f][0] * nf[g][0] + nf[f][1] * nf[g][1] + nf[f][2] * nf[g][2]) / nn
-                            : 1.0;
-          c = std::max(-1.0, std::min(1.0, c));
-          const double dihedral = pi - std::acos(c);
-          q.min_angle_deg = std::min(q.min_angle_deg, dihedral * 180.0 / pi);
-        }
-    }
+    const double hmin = dim == 2 ? triangle_angles(mesh, n, meas, lmax, pi, q.min_angle_deg)
+                                 : tetrahedron_angles(mesh, n, meas, pi, q.min_angle_deg);
     q.min_size = std::min(q.min_size, hmin);
     q.max_aspect = std::max(q.max_aspect, hmin > 0 ? lmax / hmin
                                                    : std::numeric_limits<double>::infinity());
@@ -299,134 +310,6 @@ std::vector<int> boundary_faces(const HostMesh& mesh) {
     for (int k = 0; k < dim; ++k)
       out.push_back(mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, k)]);
   return out;
-}
-
-// ---------------------------------------------------------------------------------------------
-// Locality reordering (Morton order of element centroids)
-
-namespace {
-
-std::uint64_t spread2(std::uint64_t x) {  // 32 bits -> every other bit of 64
-  x &= 0xffffffffull;
-  x = (x | (x << 16)) & 0x0000ffff0000ffffull;
-  x = (x | (x << 8)) & 0x00ff00ff00ff00ffull;
-  x = (x | (x << 4)) & 0x0f0f0f0f0f0f0f0full;
-  x = (x | (x << 2)) & 0x3333333333333333ull;
-  x = (x | (x << 1)) & 0x5555555555555555ull;
-  return x;
-}
-
-std::uint64_t spread3(std::uint64_t x) {  // 21 bits -> every third bit of 63
-  x &= 0x1fffffull;
-  x = (x | (x << 32)) & 0x1f00000000ffffull;
-  x = (x | (x << 16)) & 0x1f0000ff0000ffull;
-  x = (x | (x << 8)) & 0x100f00f00f00f00full;
-  x = (x | (x << 4)) & 0x10c30c30c30c30c3ull;
-  x = (x | (x << 2)) & 0x1249249249249249ull;
-  return x;
-}
-
-}  // namespace
-
-void reorder_for_locality(HostMesh& mesh) {
-  const int dim = mesh.dim;
-  const int npe = dim + 1;
-  const int ne = mesh.num_elems();
-  const int nn = mesh.num_nodes();
-  if (ne == 0) return;
-  std::vector<std::array<double, 3>> c(ne);
-  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
-  for (int k = 0; k < 3; ++k) {
-    lo[k] = std::numeric_limits<double>::infinity();
-    hi[k] = -std::numeric_limits<double>::infinity();
-  }
-  for (int e = 0; e < ne; ++e) {
-    c[e] = centroid(mesh, e);
-    for (int k = 0; k < dim; ++k) {
-      lo[k] = std::min(lo[k], c[e][k]);
-      hi[k] = std::max(hi[k], c[e][k]);
-    }
-  }
-  // Same scale on all axes so that the curve does not stretch thin domains.
-  double ext = 0;
-  for (int k = 0; k < dim; ++k) ext = std::max(ext, hi[k] - lo[k]);
-  const double cells = dim == 2 ? 4294967295.0 : 2097151.0;
-  const double scale = ext > 0 ? cells / ext : 0.0;
-  std::vector<std::uint64_t> code(ne);
-  for (int e = 0; e < ne; ++e) {
-    std::uint64_t q[3] = {0, 0, 0};
-    for (int k = 0; k < dim; ++k) {
-      double v = std::floor((c[e][k] - lo[k]) * scale);
-      v = std::max(0.0, std::min(cells, v));
-      q[k] = static_cast<std::uint64_t>(v);
-    }
-    code[e] = dim == 2 ? (spread2(q[0]) | (spread2(q[1]) << 1))
-                       : (spread3(q[0]) | (spread3(q[1]) << 1) | (spread3(q[2]) << 2));
-  }
-  std::vector<int> order(ne);  // order[new] = old
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return code[a] < code[b]; });
-  std::vector<int> elem_new(ne);  // old -> new
-  for (int i = 0; i < ne; ++i) elem_new[order[i]] = i;
-
-  // Nodes in order of first use by the sorted elements; unused nodes keep their relative order
-  // at the end.
-  std::vector<int> node_new(nn, -1);
-  int next = 0;
-  for (int i = 0; i < ne; ++i)
-    for (int a = 0; a < npe; ++a) {
-      const int n = mesh.elems[static_cast<std::size_t>(order[i]) * npe + a];
-      if (node_new[n] < 0) node_new[n] = next++;
-    }
-  for (int n = 0; n < nn; ++n)
-    if (node_new[n] < 0) node_new[n] = next++;
-
-  std::vector<double> X(mesh.X.size());
-  std::vector<int> origin(nn);
-  for (int n = 0; n < nn; ++n) {
-    for (int k = 0; k < dim; ++k)
-      X[static_cast<std::size_t>(node_new[n]) * dim + k] = mesh.X[static_cast<std::size_t>(n) * dim + k];
-    origin[node_new[n]] =
-        mesh.node_origin.size() == static_cast<std::size_t>(nn) ? mesh.node_origin[n] : n;
-  }
-  std::vector<int> elems(mesh.elems.size());
-  std::vector<int> region(ne);
-  for (int i = 0; i < ne; ++i) {
-    for (int a = 0; a < npe; ++a)
-      elems[static_cast<std::size_t>(i) * npe + a] =
-          node_new[mesh.elems[static_cast<std::size_t>(order[i]) * npe + a]];
-    region[i] = mesh.elem_region[order[i]];
-  }
-  for (auto& [name, set] : mesh.node_sets) {
-    for (int& n : set) n = node_new[n];
-    std::sort(set.begin(), set.end());
-  }
-  // Interfaces (only if someone reorders after insertion): remap, keep each interface's sides,
-  // and sort them again by their A-side element.
-  const int ni = mesh.num_ifaces();
-  if (ni > 0) {
-    std::vector<int> idx(ni);
-    std::iota(idx.begin(), idx.end(), 0);
-    for (int& n : mesh.ifaces) n = node_new[n];
-    for (int& e : mesh.iface_elems) e = elem_new[e];
-    std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) {
-      return mesh.iface_elems[2 * a] < mesh.iface_elems[2 * b];
-    });
-    std::vector<int> ifaces(mesh.ifaces.size()), iface_elems(mesh.iface_elems.size());
-    for (int i = 0; i < ni; ++i) {
-      for (int k = 0; k < 2 * dim; ++k)
-        ifaces[static_cast<std::size_t>(2 * dim) * i + k] = mesh.ifaces[static_cast<std::size_t>(2 * dim) * idx[i] + k];
-      iface_elems[2 * i] = mesh.iface_elems[2 * idx[i]];
-      iface_elems[2 * i + 1] = mesh.iface_elems[2 * idx[i] + 1];
-    }
-    mesh.ifaces.swap(ifaces);
-    mesh.iface_elems.swap(iface_elems);
-  }
-  mesh.X.swap(X);
-  mesh.elems.swap(elems);
-  mesh.elem_region.swap(region);
-  mesh.node_origin.swap(origin);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -63,13 +63,12 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
 HostMesh generate_box(const std::array<double, 3>& origin, const std::array<double, 3>& size,
                       int nx, int ny, int nz, const std::string& region = "body");
 // Sphere of radius R, unstructured tetrahedra of size h (Gmsh). Node sets: "surface", "all".
+HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
+                         const std::string& region = "body");
 // Two meshes side by side as one (separate bodies): b's node ids, elements, regions and interfaces
 // shifted after a's; node sets renamed "<prefix_a>.<name>" and "<prefix_b>.<name>".
 HostMesh merge_meshes(const HostMesh& a, const HostMesh& b, const std::string& prefix_a,
                       const std::string& prefix_b);
-
-HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
-                         const std::string& region = "body");
 // Dispatch on spec.kind.
 HostMesh build_mesh(const MeshSpec& spec, int dim);
 

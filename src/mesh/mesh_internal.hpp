@@ -45,6 +45,15 @@ void orient_positively(HostMesh& m);
 void check_elements_impl(const HostMesh& mesh, const std::string& source,
                          const std::vector<std::size_t>* elem_tags);
 
+// A mesh taken from the current Gmsh model (gmsh_extract.cpp), with Gmsh's tag of each element.
+struct Extracted {
+  HostMesh mesh;
+  std::vector<std::size_t> elem_tags;
+};
+// Turn the current Gmsh model's mesh into a HostMesh (call inside a Gmsh session). Does not check
+// element orientation. Throws InputError naming `source`.
+Extracted extract_model(int dim, const std::string& source);
+
 // Format a double compactly (like %g with 6 significant digits).
 std::string fmt(double v);
 
