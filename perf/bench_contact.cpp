@@ -37,16 +37,8 @@ Case make_case(int dim, double h, int contact) {
   c.dim = dim;
   c.materials = {BulkMaterial{"rock", 2700, 30e9, 0.25}};
   c.region_material = {{"block", 0}, {"floor", 0}};
-  InterfaceMaterial im;
-  im.name = "if";
-  im.kn = 30e9 / (0.1 * h);
-  im.ks = im.kn / 2.5;
-  im.ft = 1e30;  // no failures during the run
-  im.c = 1e30;
-  im.phi = 0.5;
-  im.Gnc = 1e30;
-  im.Gsc = 1e30;
-  c.interface_materials = {im};
+  const double kn = 30e9 / (0.1 * h);
+  c.interface_materials = {fdem_test::strong_interface(kn, kn / 2.5)};  // no failures during the run
   c.fracturable_regions = {"block"};
   c.fracture_material = 0;
   c.contact.enabled = contact;

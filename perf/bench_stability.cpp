@@ -24,12 +24,15 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "perf/bench_common.hpp"
 #include "solver/simulation.hpp"
-#include "../tests/stability_fixtures.hpp"  // test helpers (exact stable step, fixtures)
+#include "tests/stability_fixtures.hpp"  // test helpers (exact stable step, fixtures)
 
 namespace {
 
 using namespace fdem;
+using fdem_bench::seconds_since;
+using fdem_test::host_view;
 using fdem_test::mechanical;
 
 constexpr double kE = 33e9, kNu = 0.25, kRho = 2700;
@@ -44,21 +47,14 @@ Case make_case(int dim, double kfac, double d) {
   return c;
 }
 
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
 // Node-sum (Gershgorin) bound on the spring part: omega^2 <= max_i 2 sum_{points at i} k A / m_i,
 // combined with the bulk step `bulk` like the solver's estimate. Proposed in docs/robustness.md.
 template <int D>
 double node_sum_estimate(const Simulation<D>& sim, double kmax, double bulk) {
   if (sim.m.ni == 0) return bulk;
-  auto iface = Kokkos::create_mirror_view(sim.m.iface);
-  auto iarea = Kokkos::create_mirror_view(sim.m.iarea);
-  auto mass = Kokkos::create_mirror_view(sim.m.mass);
-  Kokkos::deep_copy(iface, sim.m.iface);
-  Kokkos::deep_copy(iarea, sim.m.iarea);
-  Kokkos::deep_copy(mass, sim.m.mass);
+  const auto iface = host_view(sim.m.iface);
+  const auto iarea = host_view(sim.m.iarea);
+  const auto mass = host_view(sim.m.mass);
   std::vector<double> ksum(sim.m.nn, 0.0);
   for (int q = 0; q < sim.m.ni; ++q)
     for (int k = 0; k < 2 * D; ++k) ksum[iface(q, k)] += kmax * iarea(q);
@@ -73,18 +69,12 @@ double node_sum_estimate(const Simulation<D>& sim, double kmax, double bulk) {
 // central differences of the element force kernel. Proposed in docs/robustness.md.
 template <int D>
 double element_bound(const Simulation<D>& sim) {
-  auto X = Kokkos::create_mirror(sim.m.X);
-  auto elem = Kokkos::create_mirror(sim.m.elem);
-  auto grad = Kokkos::create_mirror(sim.m.grad);
-  auto vol0 = Kokkos::create_mirror(sim.m.vol0);
-  auto emat = Kokkos::create_mirror(sim.m.emat);
-  auto mat = Kokkos::create_mirror(sim.m.mat);
-  Kokkos::deep_copy(X, sim.m.X);
-  Kokkos::deep_copy(elem, sim.m.elem);
-  Kokkos::deep_copy(grad, sim.m.grad);
-  Kokkos::deep_copy(vol0, sim.m.vol0);
-  Kokkos::deep_copy(emat, sim.m.emat);
-  Kokkos::deep_copy(mat, sim.m.mat);
+  const auto X = host_view(sim.m.X);
+  const auto elem = host_view(sim.m.elem);
+  const auto grad = host_view(sim.m.grad);
+  const auto vol0 = host_view(sim.m.vol0);
+  const auto emat = host_view(sim.m.emat);
+  const auto mat = host_view(sim.m.mat);
   constexpr int N = (D + 1) * D;
   double lmax = 0;
   for (int e = 0; e < sim.m.ne; ++e) {
@@ -284,30 +274,13 @@ void spin_row(double rim_fraction, double turns) {
   Simulation<2> sim(make_case(2, 10, L), mesh);
   const double cp = std::sqrt(kE * (1 - kNu) / ((1 + kNu) * (1 - 2 * kNu) * kRho));
   const double R = L / std::sqrt(2.0), omega = rim_fraction * cp / R;
-  auto X = Kokkos::create_mirror(sim.m.X);
-  Kokkos::deep_copy(X, sim.m.X);
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  for (int i = 0; i < sim.m.nn; ++i) {
-    v(i, 0) = -omega * (X(i, 1) - L / 2);
-    v(i, 1) = omega * (X(i, 0) - L / 2);
-  }
-  Kokkos::deep_copy(sim.m.v, v);
-  sim.reset_energy_reference();
+  fdem_test::rigid_rotation(sim, omega, L / 2);
   sim.step(true);
   const double e0 = mechanical(sim.energies());
   const double L0 = fdem_test::angular_momentum(sim)[2];
   const long steps = std::lround(turns * 2 * M_PI / omega / sim.dt);
-  auto x = Kokkos::create_mirror(sim.m.x);
-  int a = -1, b = -1;
-  for (int i = 0; i < sim.m.nn; ++i) {
-    if (X(i, 0) == 0 && X(i, 1) == 0 && a < 0) a = i;
-    if (X(i, 0) == L && X(i, 1) == L && b < 0) b = i;
-  }
-  auto diag = [&]() {
-    Kokkos::deep_copy(x, sim.m.x);
-    return std::atan2(x(b, 1) - x(a, 1), x(b, 0) - x(a, 0));
-  };
-  double prev = diag(), angle = 0, worst = 0;
+  fdem_test::Diagonal diagonal(sim, L);
+  double worst = 0;
   const int every = std::max(1, static_cast<int>(0.5 / (omega * sim.dt)));  // < 0.5 rad apart
   for (long s = 1; s <= steps; ++s) {
     const bool sample = s % every == 0 || s == steps;
@@ -315,20 +288,12 @@ void spin_row(double rim_fraction, double turns) {
     if (sample) {
       sim.check_stability();
       worst = std::max(worst, std::fabs(mechanical(sim.energies()) / e0 - 1));
-      const double ang = diag();
-      angle += std::remainder(ang - prev, 2 * M_PI);
-      prev = ang;
+      diagonal.track();
     }
   }
+  const double angle = diagonal.turned;
   const double Lz = fdem_test::angular_momentum(sim)[2];
-  Kokkos::deep_copy(x, sim.m.x);
-  double stretch = 0;
-  for (int i = 0; i < sim.m.nn; ++i)
-    for (int j = i + 1; j < sim.m.nn; ++j) {
-      const double d0 = std::hypot(X(i, 0) - X(j, 0), X(i, 1) - X(j, 1));
-      if (d0 < 1e-9 * L) continue;
-      stretch = std::max(stretch, std::fabs(std::hypot(x(i, 0) - x(j, 0), x(i, 1) - x(j, 1)) / d0 - 1));
-    }
+  const double stretch = fdem_test::max_pair_stretch(sim, L);
   std::printf("| %.2f | %.0f | %.1f | %ld | %.2f | %.1e | %.1e | %.1e | %.1e | %.0f |\n",
               rim_fraction, omega * R, omega * sim.dt * 180 / M_PI, steps, angle / (2 * M_PI),
               worst, std::fabs(Lz / L0 - 1), stretch, rim_fraction * rim_fraction,

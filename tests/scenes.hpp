@@ -9,6 +9,20 @@
 
 namespace fdem_test {
 
+// A host copy of a View's current contents (the View itself where it is host memory already).
+template <class V>
+typename V::HostMirror host_view(const V& v) {
+  auto h = Kokkos::create_mirror_view(v);
+  Kokkos::deep_copy(h, v);
+  return h;
+}
+
+// The first time a monitored value `a` (at time t) reaches `level`, interpolated linearly from
+// `prev` (at time tprev): sets t_cross once (while it is < 0).
+inline void front_crossing(double a, double prev, double t, double tprev, double level, double& t_cross) {
+  if (t_cross < 0 && a >= level) t_cross = tprev + (t - tprev) * (level - prev) / (a - prev);
+}
+
 // Every interface failed (damage 1 at all points, no fracture energy: the scene starts from cracked
 // pieces), then handed over to contact; the next step is the energy reference.
 template <int D>

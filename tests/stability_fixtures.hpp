@@ -4,11 +4,13 @@
 // distorted mesh, and the exact stability limit of the leap-frog from the largest eigenvalue of
 // M^-1 K (K assembled through the solver's own force kernel, power iteration).
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
 #include "mesh/mesh.hpp"
 #include "solver/simulation.hpp"
+#include "scenes.hpp"
 #include "solver_fixtures.hpp"
 
 namespace fdem_test {
@@ -31,8 +33,7 @@ void random_velocities(fdem::Simulation<D>& sim, unsigned seed, double amp) {
 // Largest nodal speed.
 template <int D>
 double max_speed(const fdem::Simulation<D>& sim) {
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  Kokkos::deep_copy(v, sim.m.v);
+  const auto v = host_view(sim.m.v);
   double s = 0;
   for (int i = 0; i < sim.m.nn; ++i) {
     double q = 0;
@@ -46,12 +47,9 @@ double max_speed(const fdem::Simulation<D>& sim) {
 // leap-frog conserves it exactly when the internal forces exert no net torque (objectivity).
 template <int D>
 std::array<double, 3> angular_momentum(const fdem::Simulation<D>& sim) {
-  auto x = Kokkos::create_mirror_view(sim.m.x);
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  auto m = Kokkos::create_mirror_view(sim.m.mass);
-  Kokkos::deep_copy(x, sim.m.x);
-  Kokkos::deep_copy(v, sim.m.v);
-  Kokkos::deep_copy(m, sim.m.mass);
+  const auto x = host_view(sim.m.x);
+  const auto v = host_view(sim.m.v);
+  const auto m = host_view(sim.m.mass);
   std::array<double, 3> L{0, 0, 0};
   for (int i = 0; i < sim.m.nn; ++i) {
     if constexpr (D == 2) {
@@ -63,6 +61,67 @@ std::array<double, 3> angular_momentum(const fdem::Simulation<D>& sim) {
     }
   }
   return L;
+}
+
+// A 2D body set in rigid rotation at angular velocity omega about (c, c); the next step is the
+// energy reference.
+inline void rigid_rotation(fdem::Simulation<2>& sim, double omega, double c) {
+  const auto X = host_view(sim.m.X);
+  auto v = Kokkos::create_mirror_view(sim.m.v);
+  for (int i = 0; i < sim.m.nn; ++i) {
+    v(i, 0) = -omega * (X(i, 1) - c);
+    v(i, 1) = omega * (X(i, 0) - c);
+  }
+  Kokkos::deep_copy(sim.m.v, v);
+  sim.reset_energy_reference();
+}
+
+// The diagonal of a 2D square of side L with a corner at the origin, from the first node at (0, 0)
+// to the first node at (L, L) (reference positions), followed as the body turns: track() adds the
+// turn since the last call (less than half a turn apart) to `turned`.
+class Diagonal {
+ public:
+  Diagonal(const fdem::Simulation<2>& sim, double L) : sim_(sim), x_(Kokkos::create_mirror_view(sim.m.x)) {
+    const auto X = host_view(sim.m.X);
+    for (int i = 0; i < sim.m.nn; ++i) {
+      if (X(i, 0) == 0 && X(i, 1) == 0 && a_ < 0) a_ = i;
+      if (X(i, 0) == L && X(i, 1) == L && b_ < 0) b_ = i;
+    }
+    prev_ = angle();
+  }
+  // Its angle now.
+  double angle() {
+    Kokkos::deep_copy(x_, sim_.m.x);
+    return std::atan2(x_(b_, 1) - x_(a_, 1), x_(b_, 0) - x_(a_, 0));
+  }
+  void track() {
+    const double a = angle();
+    turned += std::remainder(a - prev_, 2 * M_PI);
+    prev_ = a;
+  }
+  double turned = 0;  // radians
+
+ private:
+  const fdem::Simulation<2>& sim_;
+  typename decltype(fdem::Model<2>::x)::HostMirror x_;
+  int a_ = -1, b_ = -1;
+  double prev_ = 0;
+};
+
+// Largest relative change of the distance between two nodes of a 2D body (reference against
+// current positions; pairs closer than 1e-9 L, copies of one node, left out).
+inline double max_pair_stretch(const fdem::Simulation<2>& sim, double L) {
+  const auto X = host_view(sim.m.X);
+  const auto x = host_view(sim.m.x);
+  double worst = 0;
+  for (int i = 0; i < sim.m.nn; ++i)
+    for (int j = i + 1; j < sim.m.nn; ++j) {
+      const double d0 = std::hypot(X(i, 0) - X(j, 0), X(i, 1) - X(j, 1));
+      if (d0 < 1e-9 * L) continue;
+      const double d1 = std::hypot(x(i, 0) - x(j, 0), x(i, 1) - x(j, 1));
+      worst = std::max(worst, std::fabs(d1 / d0 - 1));
+    }
+  return worst;
 }
 
 // Crossed-diagonal rectangle (w x h, nx x ny cells) whose cell centres are moved down to

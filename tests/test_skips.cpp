@@ -27,14 +27,10 @@ HostMesh cracked_block(int n) {
 
 template <int D>
 void expect_same_state(const Simulation<D>& a, const Simulation<D>& b, const std::string& what) {
-  auto xa = Kokkos::create_mirror_view(a.m.x);
-  auto xb = Kokkos::create_mirror_view(b.m.x);
-  auto va = Kokkos::create_mirror_view(a.m.v);
-  auto vb = Kokkos::create_mirror_view(b.m.v);
-  Kokkos::deep_copy(xa, a.m.x);
-  Kokkos::deep_copy(xb, b.m.x);
-  Kokkos::deep_copy(va, a.m.v);
-  Kokkos::deep_copy(vb, b.m.v);
+  const auto xa = fdem_test::host_view(a.m.x);
+  const auto xb = fdem_test::host_view(b.m.x);
+  const auto va = fdem_test::host_view(a.m.v);
+  const auto vb = fdem_test::host_view(b.m.v);
   long differ = 0;
   for (int i = 0; i < a.m.nn; ++i)
     for (int k = 0; k < D; ++k) differ += (xa(i, k) != xb(i, k)) + (va(i, k) != vb(i, k));

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "common/error.hpp"
+#include "scenes.hpp"
 #include "solver/simulation.hpp"
 #include "solver_fixtures.hpp"
 
@@ -97,8 +98,8 @@ TEST(Solver, WaveSpeedAndReflectionFromFreeEnd) {
     sim.step();
     const double a1 = vx(sim, n1), a2 = vx(sim, n2);
     // front arrival: first crossing of a quarter of v0 (half the pulse amplitude), interpolated
-    if (t1 < 0 && a1 >= 0.25 * v0) t1 = tprev + (sim.t - tprev) * (0.25 * v0 - prev1) / (a1 - prev1);
-    if (t2 < 0 && a2 >= 0.25 * v0) t2 = tprev + (sim.t - tprev) * (0.25 * v0 - prev2) / (a2 - prev2);
+    fdem_test::front_crossing(a1, prev1, sim.t, tprev, 0.25 * v0, t1);
+    fdem_test::front_crossing(a2, prev2, sim.t, tprev, 0.25 * v0, t2);
     prev1 = a1; prev2 = a2; tprev = sim.t;
     const double s = sep();
     if (s < min_sep) { min_sep = s; t_min = sim.t; }

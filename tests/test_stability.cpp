@@ -203,31 +203,14 @@ TEST(Stability, SpinningFreeBodyKeepsEnergyAndShape) {
   const double R = L / std::sqrt(2.0), omega = 0.1 * cp / R;
   const double turns = 20;
   // rigid rotation about the centre (L/2, L/2)
-  auto X = Kokkos::create_mirror_view(sim.m.X);
-  auto v = Kokkos::create_mirror_view(sim.m.v);
-  Kokkos::deep_copy(X, sim.m.X);
-  for (int i = 0; i < sim.m.nn; ++i) {
-    v(i, 0) = -omega * (X(i, 1) - L / 2);
-    v(i, 1) = omega * (X(i, 0) - L / 2);
-  }
-  Kokkos::deep_copy(sim.m.v, v);
-  sim.reset_energy_reference();
+  fdem_test::rigid_rotation(sim, omega, L / 2);
   sim.step(true);
   const double e0 = mechanical(sim.energies());
   const double L0 = fdem_test::angular_momentum(sim)[2];
   const long steps = std::lround(turns * 2 * M_PI / omega / sim.dt);
-  double emin = e0, emax = e0, angle = 0, prev = 0;
-  auto x = Kokkos::create_mirror_view(sim.m.x);
-  auto corner_angle = [&]() {  // angle of the diagonal from node 0's copy at (0,0) to (L,L)
-    Kokkos::deep_copy(x, sim.m.x);
-    int a = -1, b = -1;
-    for (int i = 0; i < sim.m.nn; ++i) {
-      if (X(i, 0) == 0 && X(i, 1) == 0 && a < 0) a = i;
-      if (X(i, 0) == L && X(i, 1) == L && b < 0) b = i;
-    }
-    return std::atan2(x(b, 1) - x(a, 1), x(b, 0) - x(a, 0));
-  };
-  prev = corner_angle();
+  double emin = e0, emax = e0;
+  // the diagonal from node 0's copy at (0,0) to (L,L)
+  fdem_test::Diagonal diagonal(sim, L);
   for (long s = 1; s <= steps; ++s) {
     const bool sample = s % 50 == 0;
     sim.step(sample);
@@ -236,23 +219,14 @@ TEST(Stability, SpinningFreeBodyKeepsEnergyAndShape) {
       const double e = mechanical(sim.energies());
       emin = std::min(emin, e);
       emax = std::max(emax, e);
-      const double a = corner_angle();
-      angle += std::remainder(a - prev, 2 * M_PI);
-      prev = a;
+      diagonal.track();
     }
   }
-  angle += std::remainder(corner_angle() - prev, 2 * M_PI);
+  diagonal.track();
+  const double angle = diagonal.turned;
   const double Lz = fdem_test::angular_momentum(sim)[2];
   // shape: every pair of nodes of the deformed body against the reference, after the rotation
-  Kokkos::deep_copy(x, sim.m.x);
-  double worst_stretch = 0;
-  for (int i = 0; i < sim.m.nn; ++i)
-    for (int j = i + 1; j < sim.m.nn; ++j) {
-      const double d0 = std::hypot(X(i, 0) - X(j, 0), X(i, 1) - X(j, 1));
-      if (d0 < 1e-9 * L) continue;  // copies of one node
-      const double d1 = std::hypot(x(i, 0) - x(j, 0), x(i, 1) - x(j, 1));
-      worst_stretch = std::max(worst_stretch, std::fabs(d1 / d0 - 1));
-    }
+  const double worst_stretch = fdem_test::max_pair_stretch(sim, L);
   const double strain_scale = std::pow(omega * R / cp, 2);
   std::printf("[ stability ] spin: %ld steps, %.2f turns, energy %.2e / %.2e, angular momentum "
               "%.2e, worst pair stretch %.2e ((v/c_p)^2 = %.2e)\n",
