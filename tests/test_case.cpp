@@ -12,6 +12,8 @@
 
 #include "common/error.hpp"
 #include "io/case.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/run.hpp"
 
 namespace {
 
@@ -767,6 +769,50 @@ TEST(CaseMeshCheck, ExampleCasesMatchTheirGeneratedMeshes) {
     EXPECT_GT(m.num_elems(), 0) << path;
     EXPECT_NO_THROW(fdem::check_case_against_mesh(c, m)) << path;
   }
+}
+
+// A run writes its case.json with the values it derived (docs/case-format.md): the platen and
+// contact stiffness a case leaves unset are the rule's (the fracture interface material's kn and
+// ks; without one, 10 E / mean element size and ks = kn / (2 (1 + nu))), and the file read again
+// gives the same case.
+TEST(CaseDefaults, RunCaseJsonShowsDerivedStiffness) {
+  const fs::path dir = fs::temp_directory_path() / ("fdem_case_defaults_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  json frac = base_doc();
+  frac["time"] = {{"end_time", 2e-3}, {"max_steps", 2}};
+  json plain = frac;
+  plain.erase("interface_materials");
+  plain.erase("fracture");
+  plain["contact"] = {{"enabled", true}};
+  for (const bool fractured : {true, false}) {
+    const std::string name = fractured ? "frac" : "plain";
+    const std::string path = (dir / (name + ".json")).string();
+    std::ofstream(path) << (fractured ? frac : plain).dump();
+    fdem::RunOptions opt;
+    opt.out_dir = (dir / name).string();
+    opt.progress = false;
+    fdem::run_case(path, opt);
+    std::ifstream in(opt.out_dir + "/case.json");
+    const json r = json::parse(in);
+
+    fdem::HostMesh mesh = fdem::build_mesh(fdem::load_case(path).mesh, 2);  // as the run builds it
+    fdem::reorder_for_locality(mesh);
+    const double h = fdem::mesh_quality(mesh).mean_size;
+    const double kn = fractured ? 6e13 : 10 * 30e9 / h;
+    const double ks = fractured ? 2.5e13 : kn / (2 * (1 + 0.2));
+    for (const json& j : {r["platens"][0], r["contact"]}) {
+      EXPECT_DOUBLE_EQ(j["kn"].get<double>(), kn) << name;
+      EXPECT_DOUBLE_EQ(j["ks"].get<double>(), ks) << name;
+    }
+    EXPECT_DOUBLE_EQ(r["contact"]["friction"].get<double>(), fractured ? std::tan(30 * kPi / 180) : 0.0);
+    EXPECT_NEAR(r["contact"]["skin"].get<double>(), 0.1 * h, 1e-12 * h) << name;
+
+    const Case again = fdem::load_case(opt.out_dir + "/case.json");
+    EXPECT_EQ(again.platens[0].kn, r["platens"][0]["kn"].get<double>()) << name;
+    EXPECT_EQ(again.contact.ks, r["contact"]["ks"].get<double>()) << name;
+  }
+  std::error_code ec;
+  fs::remove_all(dir, ec);
 }
 
 }  // namespace

@@ -55,7 +55,7 @@ struct PlatenSpec {
   Vec3 point{0, 0, 0};     // a point of the plane at t = 0
   Vec3 normal{0, 0, 0};    // unit normal pointing into the body side
   Vec3 velocity{0, 0, 0};  // prescribed velocity of the plane
-  double kn = 0, ks = 0;   // Pa/m (per unit contact area); 0 in the file means "derive"
+  double kn = 0, ks = 0;   // Pa/m (per unit contact area); 0: derive (resolve_defaults)
   double friction = 0;     // Coulomb coefficient
   double cohesion = 0;     // Pa
 };
@@ -64,8 +64,8 @@ struct PlatenSpec {
 // and the faces of failed interfaces. See docs/case-format.md, "contact".
 struct ContactSpec {
   int enabled = -1;        // -1: auto (on when the mesh has interfaces or more than one body); 0: off; 1: on
-  double kn = 0, ks = 0;   // Pa/m per unit contact area; 0: derive
-  double friction = -1;    // Coulomb coefficient; < 0: derive (tan phi of the fracture material, else 0)
+  double kn = 0, ks = 0;   // Pa/m per unit contact area; 0: derive (resolve_defaults)
+  double friction = -1;    // Coulomb coefficient; < 0: derive (default_contact_friction)
   double cohesion = 0;     // Pa
   double skin = 0;         // m, Verlet skin of the broad phase; 0: derive (0.1 mean element size)
 };
@@ -116,7 +116,9 @@ struct Case {
   std::vector<std::string> monitors;  // node sets whose mean displacement goes into history.csv
   bool output_fragments = true;  // fragments.csv and the snapshot field (runs with interfaces only)
 
-  nlohmann::json resolved;       // the case after --set overrides and defaults, written to out/
+  // The case after --set overrides and defaults, written to out/ (with the derived values once
+  // resolve_defaults has run).
+  nlohmann::json resolved;
 };
 
 // Reads, applies overrides ("key.path=value", value parsed as JSON when it parses, else a string)
@@ -129,5 +131,14 @@ Case parse_case(nlohmann::json doc, const std::string& source,
 
 // Checks that names used by the case (regions, node sets) exist in the mesh. Throws InputError.
 void check_case_against_mesh(const Case& c, const HostMesh& mesh);
+
+// Fills the values the case leaves to be derived from its materials and mesh (the mesh as the
+// solver gets it), in the Case and in `resolved`; values already set are kept, so a second call
+// changes nothing. Platen kn and ks; contact kn, ks, friction and skin (docs/case-format.md,
+// "platens" and "contact"). Defined in src/io/case_defaults.cpp.
+void resolve_defaults(Case& c, const HostMesh& mesh);
+
+// Contact friction when not given: tan(phi) of the fracture interface material, else 0.
+double default_contact_friction(const Case& c);
 
 }  // namespace fdem

@@ -141,9 +141,7 @@ void read_contact(json& doc, Case& c, const Reader& R) {
   }
   c.contact.kn = R.number(ct, P, "kn", ge(0), 0.0);
   c.contact.ks = R.number(ct, P, "ks", ge(0), 0.0);
-  const double mu0 =
-      c.fracture_material >= 0 ? std::tan(c.interface_materials[c.fracture_material].phi) : 0.0;
-  c.contact.friction = R.number(ct, P, "friction", ge(0), mu0);
+  c.contact.friction = R.number(ct, P, "friction", ge(0), default_contact_friction(c));
   c.contact.cohesion = R.number(ct, P, "cohesion", ge(0), 0.0);
   c.contact.skin = R.number(ct, P, "skin", ge(0), 0.0);
 }

@@ -74,35 +74,17 @@ template <int D>
 void ContactSystem<D>::set_law(const Case& c, const HostMesh& mesh) {
   const MeshQuality mq = mesh_quality(mesh);
   const double hmean = mq.mean_size;
-  double kn = c.contact.kn, ks = c.contact.ks, mu = c.contact.friction;
-  double ks_ratio;
-  if (c.fracture_material >= 0) {
-    const auto& im = c.interface_materials[c.fracture_material];
-    if (!(kn > 0)) kn = im.kn;
-    ks_ratio = im.ks / im.kn;
-    if (mu < 0) mu = std::tan(im.phi);
-  } else {
-    double emax = 0, nu = 0.25;
-    for (const auto& bm : c.materials)
-      if (bm.E > emax) {
-        emax = bm.E;
-        nu = bm.nu;
-      }
-    if (!(kn > 0)) kn = 10 * emax / hmean;
-    ks_ratio = 1.0 / (2 * (1 + nu));
-    if (mu < 0) mu = 0.0;
-  }
-  if (!(ks > 0)) ks = kn * ks_ratio;
-  law.kn = kn;
-  law.ks = ks;
-  law.mu = mu;
+  // kn, ks, friction and skin as derived by resolve_defaults (io/case.hpp) when not given
+  law.kn = c.contact.kn;
+  law.ks = c.contact.ks;
+  law.mu = c.contact.friction;
   law.coh = c.contact.cohesion;
   // A node deeper than a quarter of the thinnest element behind a face is not in contact with it
   // (it would be nearer the face's back side); coplanar faces are within 30 degrees.
   law.dpen = 0.25 * (mq.min_size > 0 ? mq.min_size : hmean);
   law.tol = 0.01;
   law.cos_same = std::cos(30.0 * M_PI / 180.0);
-  skin = c.contact.skin > 0 ? c.contact.skin : 0.1 * hmean;
+  skin = c.contact.skin;
   radius = law.dpen + skin;
 }
 

@@ -235,8 +235,11 @@ void build_interface_chunks(const HostMesh& mesh, Model<D>& m) {
 }
 
 template <int D>
-Simulation<D>::Simulation(const Case& c, const HostMesh& mesh) {
-  if (mesh.dim != D) throw InputError(c.file + ": mesh dimension does not match 'dimension'");
+Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
+  if (mesh.dim != D) throw InputError(given.file + ": mesh dimension does not match 'dimension'");
+  // The derived values (a run has filled them already; a case built in code may not have).
+  Case c = given;
+  resolve_defaults(c, mesh);
   m.nn = mesh.num_nodes();
   m.ne = mesh.num_elems();
   m.ni = mesh.num_ifaces();

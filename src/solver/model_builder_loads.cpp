@@ -56,34 +56,11 @@ void build_boundary_areas(const HostMesh& mesh, Model<D>& m) {
   Kokkos::deep_copy(m.barea, ba_h);
 }
 
-namespace {
-
-// Default platen stiffness: the interface stiffness, else 10 E / mean element size.
-void default_platen_stiffness(const Case& c, const HostMesh& mesh, double& kn, double& ks_ratio) {
-  kn = 0;
-  ks_ratio = 0.4;
-  if (c.fracture_material >= 0) {
-    kn = c.interface_materials[c.fracture_material].kn;
-    ks_ratio = c.interface_materials[c.fracture_material].ks / kn;
-    return;
-  }
-  double emax = 0, nu = 0.25;
-  for (const auto& bm : c.materials)
-    if (bm.E > emax) { emax = bm.E; nu = bm.nu; }
-  const auto q = mesh_quality(mesh);
-  kn = 10 * emax / q.mean_size;
-  ks_ratio = 1.0 / (2 * (1 + nu));
-}
-
-}  // namespace
-
 template <int D>
-double build_platens(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
+double build_platens(const Case& c, const HostMesh& /*mesh*/, const std::vector<double>& mass, Model<D>& m,
                      std::vector<std::string>& names) {
   if (static_cast<int>(c.platens.size()) > kMaxPlatens)
     throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
-  double kn_default, ks_ratio;
-  default_platen_stiffness(c, mesh, kn_default, ks_ratio);
   auto bn_h = mirror(m.bnode);
   auto ba_h = mirror(m.barea);
   Kokkos::deep_copy(bn_h, m.bnode);
@@ -101,8 +78,8 @@ double build_platens(const Case& c, const HostMesh& mesh, const std::vector<doub
       P.n[k] = ps.normal[k] / nlen;
       P.vel[k] = ps.velocity[k];
     }
-    P.kn = ps.kn > 0 ? ps.kn : kn_default;
-    P.ks = ps.ks > 0 ? ps.ks : P.kn * ks_ratio;
+    P.kn = ps.kn;  // derived values filled by resolve_defaults (io/case.hpp)
+    P.ks = ps.ks;
     P.mu = ps.friction;
     P.coh = ps.cohesion;
     names.push_back(ps.name);

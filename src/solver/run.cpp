@@ -33,7 +33,8 @@ HostMesh prepare_mesh(const Case& c) {
 }
 
 // The resolved case without the keys that do not change the results: the checkpoint interval,
-// and the mesh file's path (its content is in the mesh hash; the project folder may move).
+// and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken
+// of the case as read, before resolve_defaults (checkpoints of earlier versions store this hash).
 std::string case_hash(const Case& c) {
   nlohmann::json r = c.resolved;
   if (r.contains("output") && r["output"].is_object()) r["output"].erase("checkpoint_every");
@@ -75,7 +76,7 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 }  // namespace
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
-  const Case c = load_case(case_path, opt.overrides);
+  Case c = load_case(case_path, opt.overrides);
   if (opt.checkpoint_every >= 0 && !std::isfinite(opt.checkpoint_every))
     throw InputError("--checkpoint-every must be a finite time in seconds");
   StateArrays restart;
@@ -90,15 +91,19 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   const StateArrays* r = nullptr;
   if (!opt.restart.empty()) {
     check_restart_matches(opt.restart, header, c, mesh, id);
-    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
     r = &restart;
   }
+  // case.json (a new run wrote it as read above, so that a mesh error leaves it) with the derived
+  // values the run uses
+  resolve_defaults(c, mesh);
+  write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
   return c.dim == 2 ? run_dim<2>(c, mesh, out, opt, id, r) : run_dim<3>(c, mesh, out, opt, id, r);
 }
 
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides) {
-  const Case c = load_case(case_path, overrides);
+  Case c = load_case(case_path, overrides);
   const HostMesh mesh = prepare_mesh(c);
+  resolve_defaults(c, mesh);
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
   auto add_dt = [&](const auto& sim) {
     report["time_step"] = stable_report(sim);
