@@ -1,4 +1,4 @@
-// Contact between deformable bodies (METHOD.md section 6; src/solver/contact_system.hpp,
+// Contact between deformable bodies (docs/theory.md section 6b; src/solver/contact_system.hpp,
 // kernels/contact.hpp): the broad phase against brute force, a block on an inclined plane, two
 // blocks meeting head-on, a sphere bouncing off a wall (Hertz), a fully cracked block settling into
 // a heap, and the stick-slip rule along a precut crack.

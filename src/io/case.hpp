@@ -49,7 +49,7 @@ struct InitialVelocity {
 };
 
 // Rigid plane (2D: line) with prescribed motion, pushing on the body's boundary nodes through
-// penalty springs with Coulomb friction and cohesion (METHOD.md section 6).
+// penalty springs with Coulomb friction and cohesion (docs/theory.md section 6b).
 struct PlatenSpec {
   std::string name;
   Vec3 point{0, 0, 0};     // a point of the plane at t = 0
@@ -60,7 +60,7 @@ struct PlatenSpec {
   double cohesion = 0;     // Pa
 };
 
-// Contact between deformable bodies (METHOD.md section 6): the outer boundaries of the bodies
+// Contact between deformable bodies (docs/theory.md section 6b): the outer boundaries of the bodies
 // and the faces of failed interfaces. See docs/case-format.md, "contact".
 struct ContactSpec {
   int enabled = -1;        // -1: auto (on when the mesh has interfaces or more than one body); 0: off; 1: on
