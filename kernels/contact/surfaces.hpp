@@ -114,9 +114,11 @@ void activate_faces(const ContactSurface<D>& surf, const Kokkos::View<int*>& ico
 
 // Clusters: within each vertex group, copies joined by intact interface pairs share the smallest
 // node id (surf.clus).
-template <int D>
-void update_clusters(const VertexGroups& G, const ContactSurface<D>& surf,
-                     const Kokkos::View<int* [2 * D]>& iface_in, const Kokkos::View<int*>& icontact_in) {
+// (IfaceView: Model::iface, View<int* [2 * D]>. A template parameter, not that type: nvcc 13's
+// front end crashed on a parameter whose extent is an expression of D, docs/cuda.md.)
+template <int D, class IfaceView>
+void update_clusters(const VertexGroups& G, const ContactSurface<D>& surf, const IfaceView& iface_in,
+                     const Kokkos::View<int*>& icontact_in) {
   if (G.n == 0) return;
   auto goff = G.off;
   auto gent = G.ent;
