@@ -301,13 +301,8 @@ KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<in
 template <int D>
 int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilter<D>& F,
                      const Kokkos::View<int*>& off, int nn) {
-  const GridGeo<D> geo = g.geo;
-  auto offset = g.offset;
-  auto cfaces = g.faces;
-  auto x = S.x;
-  auto fnode = S.fnode;
-  auto points = S.points;
-  const double radius = S.radius, tol = S.tol;
+  const CellGrid<D> grid = g;
+  const SearchSet<D> set = S;
   const PairFilter<D> Fc = F;
   auto o = off;
   const Kokkos::View<int*> none;
@@ -316,10 +311,11 @@ int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
       KOKKOS_LAMBDA(const int i) { o(i) = 0; });
   Kokkos::parallel_for(
       "fdem::contact::pairs_count", Kokkos::RangePolicy<ExecSpace>(0, S.np), KOKKOS_LAMBDA(const int i) {
-        const int s = points(i);
+        const int s = set.points(i);
         double p[D];
-        for (int k = 0; k < D; ++k) p[k] = x(s, k);
-        o(s) = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, none, 0, tol);
+        for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
+        o(s) = grid_query<D>(grid.geo, grid.offset, grid.faces, set.x, set.fnode, Fc, set.radius, s, p, none, 0,
+                             set.tol);
       });
   int total = 0;
   Kokkos::parallel_scan(
@@ -349,23 +345,19 @@ KOKKOS_INLINE_FUNCTION bool pair_order(const PairFilter<D>& F, int fa, int fb) {
 template <int D>
 void candidates_fill(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilter<D>& F,
                      const Kokkos::View<int*>& off, const Kokkos::View<int*>& face) {
-  const GridGeo<D> geo = g.geo;
-  auto offset = g.offset;
-  auto cfaces = g.faces;
-  auto x = S.x;
-  auto fnode = S.fnode;
-  auto points = S.points;
-  const double radius = S.radius, tol = S.tol;
+  const CellGrid<D> grid = g;
+  const SearchSet<D> set = S;
   const PairFilter<D> Fc = F;
   auto o = off;
   auto pf = face;
   Kokkos::parallel_for(
       "fdem::contact::pairs_fill", Kokkos::RangePolicy<ExecSpace>(0, S.np), KOKKOS_LAMBDA(const int i) {
-        const int s = points(i);
+        const int s = set.points(i);
         double p[D];
-        for (int k = 0; k < D; ++k) p[k] = x(s, k);
+        for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
         const int b = o(s);
-        const int cnt = grid_query<D>(geo, offset, cfaces, x, fnode, Fc, radius, s, p, pf, b, tol);
+        const int cnt =
+            grid_query<D>(grid.geo, grid.offset, grid.faces, set.x, set.fnode, Fc, set.radius, s, p, pf, b, set.tol);
         for (int a = b + 1; a < b + cnt; ++a) {  // insertion sort: segments are short
           const int val = pf(a);
           int c = a - 1;
@@ -384,41 +376,30 @@ template <int D>
 void transfer_history(const PairList<D>& from, const PairList<D>& to, const Kokkos::View<int*>& points, int np,
                       const PairFilter<D>& F) {
   const PairFilter<D> Fc = F;
-  auto fo = from.off;
-  auto ff = from.face;
-  auto ffn = from.fn;
-  auto fac = from.ac;
-  auto fg0 = from.g0;
-  auto ffs = from.fs;
-  auto to_off = to.off;
-  auto tf = to.face;
-  auto tfn = to.fn;
-  auto tac = to.ac;
-  auto tg0 = to.g0;
-  auto tfs = to.fs;
+  const PairList<D> a = from, b = to;  // old and new lists
   auto pts = points;
   Kokkos::parallel_for(
       "fdem::contact::transfer", Kokkos::RangePolicy<ExecSpace>(0, np), KOKKOS_LAMBDA(const int i) {
         const int s = pts(i);
-        const int b0 = fo(s), e0 = fo(s + 1);
-        for (int j = to_off(s); j < to_off(s + 1); ++j) {
-          const int f = tf(j);
+        const int b0 = a.off(s), e0 = a.off(s + 1);
+        for (int j = b.off(s); j < b.off(s + 1); ++j) {
+          const int f = b.face(j);
           int lo = b0, hi = e0;  // binary search in the old (sorted) segment
           while (lo < hi) {
             const int mid = (lo + hi) / 2;
-            if (pair_order(Fc, ff(mid), f)) lo = mid + 1;
+            if (pair_order(Fc, a.face(mid), f)) lo = mid + 1;
             else hi = mid;
           }
-          if (lo < e0 && ff(lo) == f) {
-            tfn(j) = ffn(lo);
-            tac(j) = fac(lo);
-            tg0(j) = fg0(lo);
-            for (int k = 0; k < D; ++k) tfs(j, k) = ffs(lo, k);
+          if (lo < e0 && a.face(lo) == f) {
+            b.fn(j) = a.fn(lo);
+            b.ac(j) = a.ac(lo);
+            b.g0(j) = a.g0(lo);
+            for (int k = 0; k < D; ++k) b.fs(j, k) = a.fs(lo, k);
           } else {
-            tfn(j) = 0.0;
-            tac(j) = 0.0;
-            tg0(j) = 0.0;
-            for (int k = 0; k < D; ++k) tfs(j, k) = 0.0;
+            b.fn(j) = 0.0;
+            b.ac(j) = 0.0;
+            b.g0(j) = 0.0;
+            for (int k = 0; k < D; ++k) b.fs(j, k) = 0.0;
           }
         }
       });
