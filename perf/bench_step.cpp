@@ -45,6 +45,7 @@
 #include "perf/bench_common.hpp"
 #include "perf/bench_step_scene.hpp"
 #include "solver/simulation.hpp"
+#include "perf/yardstick.hpp"
 #include "tests/scenes.hpp"
 
 namespace {
@@ -172,14 +173,17 @@ struct KernelSet {
   std::vector<std::function<void()>> fns, before, after;
   ForceScatter<D> sf;
   Kokkos::View<double* [D]> x0, v0;
+  Yardstick<D> ys;
 
   KernelSet(Simulation<D>& sim, bool kernels)
-      : sf(sim.m.f), x0("bench_x0", sim.m.nn), v0("bench_v0", sim.m.nn) {
+      : sf(sim.m.f), x0("bench_x0", sim.m.nn), v0("bench_v0", sim.m.nn), ys(sim.m, sim.dt) {
     Simulation<D>* s = &sim;
     Model<D>* m = &sim.m;
     ContactSystem<D>* ct = sim.contact();
-    names = {"step", "step_sampled"};
-    fns = {[s]() { s->step(false); }, [s]() { s->step(true); }};
+    Yardstick<D>* y = &ys;
+    // the yardstick (perf/yardstick.hpp) is timed interleaved with the full step, in every round
+    names = {"step", "step_sampled", "yardstick"};
+    fns = {[s]() { s->step(false); }, [s]() { s->step(true); }, [y]() { y->step(); }};
     if (kernels) {
       names.insert(names.end(), {"forces", "scatter_reset", "scatter_contribute", "nodes", "nodes_sampled",
                                  "strain_energy", "interface_state"});
@@ -226,7 +230,7 @@ struct KernelSet {
 // The table's rows from the timings: bytes from the traffic model, and the derived rows (the force
 // computation without its scatter, the extra cost of sampling).
 std::vector<Row> make_rows(const std::vector<std::string>& names, const std::vector<Stat>& st,
-                           const Traffic& tr, bool kernels, bool contact) {
+                           const Traffic& tr, double yardstick_bytes, bool kernels, bool contact) {
   std::vector<Row> rows;
   auto stat_of = [&](const std::string& n) {
     for (size_t k = 0; k < names.size(); ++k)
@@ -236,6 +240,7 @@ std::vector<Row> make_rows(const std::vector<std::string>& names, const std::vec
   const double forces_bytes = tr.bulk + tr.iface + tr.reset + tr.contribute;
   rows.push_back({"step", stat_of("step"), forces_bytes + tr.nodes});
   rows.push_back({"step_sampled", stat_of("step_sampled"), forces_bytes + tr.nodes_sampled + tr.strain + tr.istate});
+  rows.push_back({"yardstick", stat_of("yardstick"), yardstick_bytes});
   if (!kernels) return rows;
   rows.push_back({"forces", stat_of("forces"), forces_bytes});
   const Stat r = stat_of("scatter_reset"), q = stat_of("scatter_contribute"), F = stat_of("forces");
@@ -307,7 +312,8 @@ json run_size(double target, const Options& o, double triad_gbps) {
   ContactSystem<D>* ct = sim.contact();
   KernelSet<D> ks(sim, o.kernels);
   const std::vector<Stat> st = measure(ks.fns, o.reps, o.min_time, ks.after, ks.before);
-  const std::vector<Row> rows = make_rows(ks.names, st, tr, o.kernels, ct != nullptr);
+  const std::vector<Row> rows = make_rows(ks.names, st, tr, ks.ys.bytes(static_cast<int>(c.T)), o.kernels,
+                                          ct != nullptr);
 
   json j;
   j["dim"] = D;
@@ -330,6 +336,13 @@ json run_size(double target, const Options& o, double triad_gbps) {
   std::printf("  memory: %.0f B per element in the model's Views, + %.0f B per element in the scatter copies\n",
               mb / c.ne, sb / c.ne);
   j["kernels"] = report_rows(rows, c, triad_gbps);
+  // the full step as a multiple of the yardstick, both timed in the same rounds
+  const double ys_ns = rows[2].s.median;
+  j["step_over_yardstick"] = ys_ns > 0 ? rows[0].s.median / ys_ns : 0.0;
+  j["step_sampled_over_yardstick"] = ys_ns > 0 ? rows[1].s.median / ys_ns : 0.0;
+  std::printf("  full step / yardstick: %.2f (sampled step: %.2f)\n", j["step_over_yardstick"].get<double>(),
+              j["step_sampled_over_yardstick"].get<double>());
+  std::fflush(stdout);
   return j;
 }
 
