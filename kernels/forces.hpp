@@ -56,11 +56,15 @@ struct ForceKernel {
       else in.icontact(q) = 1;
       return;
     }
+    CohesivePoint h0[D];
+    for (int k = 0; k < D; ++k) h0[k] = h[k];
     const double dmean = interface_forces<D>(xa, xb, in.iarea(q), in.coh, h, fa, fb);
     if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
       Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     for (int k = 0; k < D; ++k) {
-      store_point(in.ihist, q, k, h[k]);
+      // the history is written only when the step changed it (most points of a run stay
+      // undamaged or unload: no write traffic for them)
+      if (!same_point(h[k], h0[k])) store_point(in.ihist, q, k, h[k]);
       for (int i = 0; i < D; ++i) {
         acc(in.iface(q, k), i) += fa[k][i];
         acc(in.iface(q, D + k), i) += fb[k][i];

@@ -120,6 +120,11 @@ KOKKOS_INLINE_FUNCTION void store_point(const HistView& ihist, int q, int k, con
   ihist(q, k, 3) = h.wd;
 }
 
+// Whether two histories are the same bit for bit (a NaN compares unequal: it is written).
+KOKKOS_INLINE_FUNCTION bool same_point(const CohesivePoint& a, const CohesivePoint& b) {
+  return a.dmax == b.dmax && a.dm0 == b.dm0 && a.dmf == b.dmf && a.wd == b.wd;
+}
+
 // Positions of element e's nodes (xe[a], a <= D) and its reference shape-function gradients G.
 template <int D, class PosView>
 KOKKOS_INLINE_FUNCTION void gather_element(const PosView& x, const ElementData<D>& el, int e, double (&xe)[D + 1][D],
