@@ -320,27 +320,44 @@ struct ContactForcesFn {
   }
 
   // 2. the other faces: each penetrated near face is a contact, its weight shared among the near
-  //    coplanar faces of its piece
+  //    coplanar faces of its piece. The near faces (phi > 0, a few per node) are listed first,
+  //    so that the pass is linear in the candidates and quadratic only in the near faces (kNear
+  //    of them at most in the list; a node with more takes the direct loop, same sums).
+  static constexpr int kNear = 32;
   KOKKOS_INLINE_FUNCTION void share(int b, int e) const {
+    int near[kNear];
+    int nnear = 0;
+    for (int j = b; j < e && nnear <= kNear; ++j)
+      if (scr.phi(j) > 0.0) {
+        if (nnear < kNear) near[nnear] = j;
+        ++nnear;
+      }
+    const bool listed = nnear <= kNear;
     for (int j = b; j < e; ++j) {
       if (scr.phi(j) < 0.0) continue;
-      const int fc = P.face(j);
       double w = 0.0;
       if (scr.g(j) < 0.0 && scr.phi(j) > 0.0) {
         double sum = 0;
-        for (int jj = b; jj < e; ++jj) {
-          if (!(scr.phi(jj) > 0.0)) continue;
-          if (jj != j) {
-            double d = 0;
-            for (int k = 0; k < D; ++k) d += scr.n(j, k) * scr.n(jj, k);
-            if (!(d > L.cos_same) || !same_piece<D>(S, fc, P.face(jj))) continue;
-          }
-          sum += scr.phi(jj);
+        if (listed) {
+          for (int t = 0; t < nnear; ++t) sum += share_term(j, near[t]);
+        } else {
+          for (int jj = b; jj < e; ++jj)
+            if (scr.phi(jj) > 0.0) sum += share_term(j, jj);
         }
         w = scr.phi(j) / (sum > 1.0 ? sum : 1.0);
       }
       scr.w(j) = w;
     }
+  }
+  // near face jj's part of the weight sum of penetrated face j: its fade when it is j itself, or
+  // coplanar with j (normals within cos_same) on the same piece; else 0
+  KOKKOS_INLINE_FUNCTION double share_term(int j, int jj) const {
+    if (jj != j) {
+      double d = 0;
+      for (int k = 0; k < D; ++k) d += scr.n(j, k) * scr.n(jj, k);
+      if (!(d > L.cos_same) || !same_piece<D>(S, P.face(j), P.face(jj))) return 0.0;
+    }
+    return scr.phi(jj);
   }
 
   // 3. what the weight changes release (the budget of rising ones, step 4)
@@ -357,6 +374,16 @@ struct ContactForcesFn {
   template <class Force>
   KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, int b, int e, const double (&xs)[D],
                                        const double (&vs)[D], double Anode, ContactSums& sums) const {
+    // the pairs that release energy (rel > 0: contacts whose weight fell, a few per node), listed
+    // as in share so that the budgets cost the releasing pairs, not all candidates
+    int relj[kNear];
+    int nrel = 0;
+    for (int j = b; j < e && nrel <= kNear; ++j)
+      if (scr.rel(j) > 0.0) {
+        if (nrel < kNear) relj[nrel] = j;
+        ++nrel;
+      }
+    const bool listed = nrel <= kNear;
     for (int j = b; j < e; ++j) {
       const int fc = P.face(j);
       const double w = scr.w(j);
@@ -364,9 +391,17 @@ struct ContactForcesFn {
                              ? related_depth<D>(S, P.face, scr.depth, b, e, fc) / kmath::sqrt(Anode * w)
                              : 0.0;
       double budget = 0.0;
-      if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j))
-        for (int jj = b; jj < e; ++jj)
-          if (jj != j && scr.rel(jj) > 0.0 && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
+      if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j) && nrel > 0) {
+        if (listed) {
+          for (int t = 0; t < nrel; ++t) {
+            const int jj = relj[t];
+            if (jj != j && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
+          }
+        } else {
+          for (int jj = b; jj < e; ++jj)
+            if (jj != j && scr.rel(jj) > 0.0 && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
+        }
+      }
       contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
                             sums);
     }
