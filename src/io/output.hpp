@@ -20,8 +20,10 @@ void ensure_output_dir(const std::string& dir);
 // failure (full disk, unwritable folder); the old content is then left as it was.
 void write_file_atomic(const std::string& path, const std::string& text);
 
-// history.csv: header "name [unit]" columns, one row per call; flushed each row so that a killed
-// run keeps every row written so far.
+// history.csv (and fragments.csv): header "name [unit]" columns, one row per call. Each row is
+// formatted whole and written with one write(2), unbuffered, so that a killed run keeps every row
+// written so far; when a write fails (full disk, file size limit) the file is cut back to its
+// last complete row and InputError naming the file is thrown.
 class HistoryWriter {
  public:
   HistoryWriter(const std::string& path, const std::vector<std::string>& columns);
@@ -38,7 +40,10 @@ class HistoryWriter {
   const std::vector<std::string>& columns() const { return columns_; }
 
  private:
-  std::FILE* f_ = nullptr;
+  // Appends `text` whole, or cuts the file back to `complete_` bytes and throws.
+  void append(const std::string& text);
+  int fd_ = -1;
+  long long complete_ = 0;  // bytes of the file in complete lines
   std::string path_;
   std::vector<std::string> columns_;
 };
