@@ -10,10 +10,32 @@ namespace fdem {
 namespace h5 {
 
 namespace {
+
+// No clean-up of HDF5 at exit. When a file cannot be closed (its last writes fail: a full disk),
+// HDF5 1.10 keeps a half-closed file in its tables, and its exit handler, closing it again, crashes
+// the process (SIGSEGV after the error message). fdem closes every file it opens (h5::Id and the
+// writers' destructors), so the handler has nothing else to do. Must run before the library
+// initialises itself, i.e. before any other HDF5 call: here, at static initialisation.
+const bool kNoCleanupAtExit = H5dont_atexit() >= 0;
+
 herr_t first_error(unsigned n, const H5E_error2_t* e, void* data) {
   if (n == 0 && e && e->desc) *static_cast<std::string*>(data) = e->desc;
   return 0;
 }
+
+// A failed write of the file driver: "file write failed: time = ..., filename = ..., errno = 28,
+// error message = 'No space left on device', buf = ..." -> "file write failed: No space left on
+// device". Other messages as they are.
+std::string shorten(const std::string& desc) {
+  const std::string key = "error message = '";
+  const auto at = desc.find(key);
+  if (at == std::string::npos) return desc;
+  const auto end = desc.find('\'', at + key.size());
+  const auto colon = desc.find(':');
+  const std::string what = colon < at ? desc.substr(0, colon) + ": " : std::string();
+  return what + desc.substr(at + key.size(), end == std::string::npos ? end : end - at - key.size());
+}
+
 }  // namespace
 
 void silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
@@ -22,7 +44,8 @@ std::string reason() {
   std::string msg;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, first_error, &msg);
   H5Eclear2(H5E_DEFAULT);
-  return msg;
+  (void)kNoCleanupAtExit;
+  return shorten(msg);
 }
 
 Id file_access_without_locking() {

@@ -20,8 +20,44 @@ void ensure_output_dir(const std::string& dir);
 // failure (full disk, unwritable folder); the old content is then left as it was.
 void write_file_atomic(const std::string& path, const std::string& text);
 
-// history.csv: header "name [unit]" columns, one row per call; flushed each row so that a killed
-// run keeps every row written so far.
+// The files fdem writes into an output folder, with the temporary names they are written under
+// before a rename: case.json (src/solver/run.cpp), summary.json and checkpoint.h5
+// (src/solver/run_loop.cpp, src/io/checkpoint.cpp), history.csv (src/solver/history_table.cpp),
+// fragments.csv (src/solver/run_output.cpp), snapshots.h5 (+ .damaged) and snapshots.xdmf
+// (src/io/snapshot_writer.cpp, src/io/snapshot_xdmf.cpp). The lock file (OutputLock) is not one
+// of them: it stays.
+const std::vector<std::string>& output_file_names();
+
+// A fresh run's output folder holds only its own results: removes from `dir` the regular files
+// named in output_file_names() (symbolic links and anything else are left alone). Returns the
+// names removed; throws InputError naming the file if one cannot be removed.
+std::vector<std::string> remove_old_outputs(const std::string& dir);
+
+// Throws InputError when a file fdem writes into `dir` (output_file_names()) is one of `inputs`
+// (the same file: std::filesystem::equivalent), e.g. `fdem run case.json --out .` in the case's
+// folder, where the resolved case.json would replace the case file.
+void refuse_inputs_among_outputs(const std::string& dir, const std::vector<std::string>& inputs);
+
+// An output folder belongs to one run at a time: holds an exclusive flock(2) on DIR/.fdem.lock
+// (which holds the pid of the run) for its lifetime. The kernel drops the lock when the process
+// ends, however it ends, so a killed run leaves no stale lock. Throws InputError naming the
+// folder and the holder's pid when another process holds it.
+class OutputLock {
+ public:
+  explicit OutputLock(const std::string& dir);
+  ~OutputLock();
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+  static constexpr const char* kName = ".fdem.lock";
+
+ private:
+  int fd_ = -1;
+};
+
+// history.csv (and fragments.csv): header "name [unit]" columns, one row per call. Each row is
+// formatted whole and written with one write(2), unbuffered, so that a killed run keeps every row
+// written so far; when a write fails (full disk, file size limit) the file is cut back to its
+// last complete row and InputError naming the file is thrown.
 class HistoryWriter {
  public:
   HistoryWriter(const std::string& path, const std::vector<std::string>& columns);
@@ -38,7 +74,10 @@ class HistoryWriter {
   const std::vector<std::string>& columns() const { return columns_; }
 
  private:
-  std::FILE* f_ = nullptr;
+  // Appends `text` whole, or cuts the file back to `complete_` bytes and throws.
+  void append(const std::string& text);
+  int fd_ = -1;
+  long long complete_ = 0;  // bytes of the file in complete lines
   std::string path_;
   std::vector<std::string> columns_;
 };

@@ -1,4 +1,7 @@
-// history.csv: a header of column names, then one row per output interval, flushed each row.
+// history.csv: a header of column names, then one row per output interval, each written whole.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -35,21 +38,34 @@ std::string header_line(const std::vector<std::string>& columns) {
   return header;
 }
 
+// The error of writing all of `text` to `fd` (0 when it was written).
+int write_all(int fd, const std::string& text) {
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return errno;
+    if (n == 0) return EIO;
+    done += static_cast<size_t>(n);
+  }
+  return 0;
+}
+
 }  // namespace
 
 HistoryWriter::HistoryWriter(const std::string& path, const std::vector<std::string>& columns)
     : path_(path), columns_(columns) {
-  f_ = std::fopen(path.c_str(), "w");
-  if (!f_) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_APPEND | O_CLOEXEC, 0666);
+  if (fd_ < 0) {
     const int err = errno;
     throw InputError("cannot open history file '" + path + "' for writing: " + std::strerror(err));
   }
-  const std::string header = header_line(columns_);
-  if (std::fputs(header.c_str(), f_) < 0 || std::fflush(f_) != 0) {
-    const int err = errno;
-    std::fclose(f_);
-    f_ = nullptr;
-    throw InputError("cannot write history file '" + path + "': " + std::strerror(err));
+  try {
+    append(header_line(columns_));
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    throw;
   }
 }
 
@@ -67,14 +83,14 @@ HistoryWriter::HistoryWriter(const std::string& path, const std::vector<std::str
     text += format_row(row);
   }
   write_file_atomic(path, text);
-  f_ = std::fopen(path.c_str(), "a");
-  if (!f_) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) {
     const int err = errno;
     throw InputError("cannot open history file '" + path + "' for appending: " +
                      std::strerror(err));
   }
+  complete_ = static_cast<long long>(text.size());
 }
-
 std::string HistoryWriter::format_row(const std::vector<double>& values) {
   std::string line;
   char buf[64];
@@ -88,7 +104,21 @@ std::string HistoryWriter::format_row(const std::vector<double>& values) {
 }
 
 HistoryWriter::~HistoryWriter() {
-  if (f_) std::fclose(f_);
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void HistoryWriter::append(const std::string& text) {
+  const int err = write_all(fd_, text);
+  if (err == 0) {
+    complete_ += static_cast<long long>(text.size());
+    return;
+  }
+  // Part of the line may be in the file: cut it back to the last complete line (not possible on
+  // a device such as /dev/full, which holds nothing anyway).
+  std::string after;
+  if (::ftruncate(fd_, static_cast<off_t>(complete_)) == 0)
+    after = "; the file is cut back to its last complete row";
+  throw InputError("cannot write history file '" + path_ + "': " + std::strerror(err) + after);
 }
 
 void HistoryWriter::row(const std::vector<double>& values) {
@@ -97,11 +127,7 @@ void HistoryWriter::row(const std::vector<double>& values) {
                            " values for " + std::to_string(columns_.size()) + " columns in '" +
                            path_ + "'");
   }
-  const std::string line = format_row(values);
-  if (std::fputs(line.c_str(), f_) < 0 || std::fflush(f_) != 0) {
-    const int err = errno;
-    throw InputError("cannot write history file '" + path_ + "': " + std::strerror(err));
-  }
+  append(format_row(values));
 }
 
 }  // namespace fdem

@@ -84,8 +84,14 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   ensure_output_dir(out);
-  // (a restart checks the case against the checkpoint before it touches the folder's case.json)
-  if (opt.restart.empty()) write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  const OutputLock lock(out);  // the folder is this run's until it returns
+  refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
+  // A new run's folder holds only its results; a restart continues those there. (A restart
+  // checks the case against the checkpoint before it touches the folder's case.json.)
+  if (opt.restart.empty()) {
+    remove_old_outputs(out);
+    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  }
   const HostMesh mesh = prepare_mesh(c);
   const RunIdentity id{case_hash(c), mesh_hash(mesh)};
   const StateArrays* r = nullptr;
