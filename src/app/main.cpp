@@ -12,6 +12,7 @@
 #include <Kokkos_Core.hpp>
 
 #include "common/error.hpp"
+#include "common/kernel_times.hpp"
 #include "fdem_version.hpp"
 #include "solver/run.hpp"
 
@@ -58,6 +59,7 @@ struct CliOptions {
   std::string case_path, out_dir;
   std::vector<std::string> sets;
   bool quiet = false;
+  bool kernel_times = false;
   double checkpoint_every = -1;
   std::string restart;
 };
@@ -69,6 +71,8 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   run->add_option("--out", o.out_dir, "output folder (default: out/<case name>)");
   run->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
   run->add_flag("--quiet", o.quiet, "no progress output");
+  run->add_flag("--kernel-times", o.kernel_times,
+                "time every Kokkos kernel by name (host backends); table at the end and in summary.json");
   run->add_option("--checkpoint-every", o.checkpoint_every,
                   "write OUT/checkpoint.h5 every this many seconds of simulated time (overrides "
                   "output.checkpoint_every; 0: none)")
@@ -98,7 +102,9 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       opt.progress = !o.quiet;
       opt.checkpoint_every = o.checkpoint_every;
       opt.restart = o.restart;
+      if (o.kernel_times) fdem::kernel_times::enable();
       fdem::run_case(o.case_path, opt);
+      if (o.kernel_times) fdem::kernel_times::print();
     }
   } catch (const fdem::InputError& e) {
     // Name the case file in every message (mesh generator errors, for one, do not).

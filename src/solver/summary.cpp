@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <vector>
 
+#include "common/kernel_times.hpp"
+
 namespace fdem {
 
 nlohmann::json mesh_report(const HostMesh& mesh) {
@@ -128,6 +130,7 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   summary["element_steps_per_second"] =
       r.loop_wall_seconds > 0 ? sim.step_count * double(sim.m.ne) / r.loop_wall_seconds : 0;
   summary["phases"] = phases_report(sim.phase_times());
+  if (kernel_times::enabled()) summary["kernel_times"] = kernel_times::report();
   summary["energy"] = energy_report(last, history.max_relative_balance_error());
   summary["interfaces_damaged"] = last.damaged;
   summary["interfaces_failed"] = last.failed;
