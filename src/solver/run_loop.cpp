@@ -28,18 +28,19 @@ RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out,
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
   if (restart) sim_.load_state(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
-  if (c.output_fragments && sim_.m.ni > 0) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
   if (restart) {
     restore(*restart);
   } else {
     history_->open(out, false);
+    if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, mesh, nullptr);
   }
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
 }
 
-// The run loop's state from the checkpoint; history.csv and snapshots.h5 cut back to it.
+// The run loop's state from the checkpoint; history.csv, fragments.csv and snapshots.h5 cut back
+// to it.
 template <int D>
 void RunLoop<D>::restore(const StateArrays& r) {
   RunState s;
@@ -51,6 +52,7 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   history_->open(out_, true);
+  if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
   snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, mesh_, &s);
 }
 
@@ -147,6 +149,7 @@ void RunLoop<D>::save_checkpoint() {
   sim_.save_state(st);
   RunState s;
   history_->save(s);
+  if (frag_) frag_->save(s);
   schedule_.save(s);
   snaps_->save(s);
   s.wall_seconds = prior_wall_ + seconds(c0 - wall0_);

@@ -38,6 +38,7 @@ class RunLoop {
   bool history_row();  // true when the stop rule is met
   void final_row();
   void save_checkpoint();
+  bool fragments_on() const { return c_.output_fragments && sim_.m.ni > 0; }
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
