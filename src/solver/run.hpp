@@ -1,5 +1,6 @@
 #pragma once
 // Host orchestration of a run: case -> mesh -> interfaces -> device model -> time loop -> output.
+#include <csignal>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,10 @@ struct RunOptions {
   bool progress = true;               // progress line on a terminal / periodic lines in logs
   double checkpoint_every = -1;       // s of simulated time; < 0: the case's output.checkpoint_every
   std::string restart;                // checkpoint to go on from (same case and --set options)
+  // Set (to the signal's number) by a signal handler to stop the run: the loop reads it once per
+  // step on the host; the run then ends after the step with a checkpoint and summary.json (stop
+  // reason "interrupted", "signal" the number). Null: not watched.
+  const volatile std::sig_atomic_t* interrupt = nullptr;
 };
 
 // Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,

@@ -1,6 +1,7 @@
 #include "solver/run_loop.hpp"
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 
 #include "io/output.hpp"
@@ -83,6 +84,10 @@ nlohmann::json RunLoop<D>::run() {
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
+    if (opt_.interrupt && *opt_.interrupt) {  // a signal (SIGINT, SIGTERM): stop after this step
+      signal_ = static_cast<int>(*opt_.interrupt);
+      return interrupted();
+    }
     if (c_.max_steps > 0 && sim_.step_count >= c_.max_steps) {
       stop_reason = "max_steps";
       break;
@@ -104,6 +109,25 @@ nlohmann::json RunLoop<D>::run() {
   if (!schedule_.last_was_row()) final_row();
   snaps_->take(sim_, frag_.get());
   return finish(stop_reason, loop_wall);
+}
+
+// The run stopped by a signal after a step: a checkpoint of this moment (a restart goes on as if
+// the run had not stopped), a snapshot (dropped by such a restart), summary.json, a message. No
+// final history row: it would take one more step.
+template <int D>
+nlohmann::json RunLoop<D>::interrupted() {
+  const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
+  progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
+  progress_->done();
+  save_checkpoint();
+  snaps_->take(sim_, frag_.get());
+  const std::string ck = out_ + "/checkpoint.h5";
+  const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
+  std::fprintf(stderr,
+               "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
+               "run %s --restart %s (and the same --set options)\n",
+               name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str());
+  return finish("interrupted", loop_wall);
 }
 
 // One step; `row`: sampled for a history row (reactions too), `check`: energies sampled and the
@@ -185,6 +209,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoint_seconds = ckpt_wall_;
   r.checkpoints_written = ckpt_written_;
   r.restart = restart_;
+  r.signal = signal_;
   const nlohmann::json summary = run_summary(c_, mesh_, sim_, *history_, frag_.get(), r);
   write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   print_run_end(summary, r, sim_.step_count, opt_.progress);
