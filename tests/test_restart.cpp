@@ -263,7 +263,8 @@ TEST_F(Restart, SigintExits130WithCheckpoint) {
 
 // A checkpoint with one byte of a dataset's data flipped reads back without an HDF5 error (the
 // value is just different); its checksum refuses it: exit 2 naming the file and the dataset. An
-// altered header attribute fails the root checksum.
+// altered header attribute fails the root checksum. Checkpoints of earlier versions (without
+// checksums) are refused.
 TEST_F(Restart, CorruptedCheckpointIsRefusedNamingTheDataset) {
   const std::string out = tmpdir("corrupt");
   const std::string sets = "--set time.max_steps=300 --checkpoint-every 1e-5";
@@ -326,6 +327,25 @@ TEST_F(Restart, CorruptedCheckpointIsRefusedNamingTheDataset) {
   EXPECT_EQ(run(out, sets + " --restart " + hdr), 2);
   log = slurp(out + ".log");
   EXPECT_NE(log.find("restart file '" + hdr + "' is damaged: the header"), std::string::npos) << log;
+
+  // a checkpoint of format version 2 (no checksums) is refused, saying why
+  const std::string v2 = out + "/version2.h5";
+  fs::copy_file(good, v2);
+  {
+    hid_t f = H5Fopen(v2.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    hid_t a = H5Aopen(f, "version", H5P_DEFAULT);
+    const int version = 2;
+    H5Awrite(a, H5T_NATIVE_INT, &version);
+    H5Aclose(a);
+    H5Fclose(f);
+  }
+  EXPECT_EQ(run(out, sets + " --restart " + v2), 2);
+  log = slurp(out + ".log");
+  EXPECT_NE(log.find("restart file '" + v2 +
+                     "' is a checkpoint of format version 2; this fdem reads version 3 "
+                     "(earlier versions carry no checksum"),
+            std::string::npos)
+      << log;
 
   // the checkpoint as written restarts
   EXPECT_EQ(run(out, sets + " --restart " + good), 0) << slurp(out + ".log");
