@@ -103,7 +103,8 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
                   "output.checkpoint_every; 0: none)")
       ->check(CLI::NonNegativeNumber);
   run->add_option("--restart", o.restart,
-                  "go on from a checkpoint written by --checkpoint-every (same case and --set options)");
+                  "go on from a checkpoint written by --checkpoint-every or by a run stopped by SIGINT / "
+                  "SIGTERM (same case and --set options)");
   run->footer(kExitStatusHelp);
 
   auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");

@@ -24,9 +24,9 @@ struct RunOptions {
 // a restart file that is missing, damaged or of another case, an output file that cannot be
 // written) or NumericalError (instability), both with a clear message.
 // With a checkpoint interval the run writes out_dir/checkpoint.h5 (atomically) every that much
-// simulated time; with `restart` it goes on from such a file: history.csv keeps the rows up to the
-// checkpoint (rewritten from the checkpoint), snapshots.h5 keeps the frames up to it, and the run
-// gives the same results as one that did not stop.
+// simulated time; with `restart` it goes on from such a file: history.csv and fragments.csv keep
+// the rows up to the checkpoint (rewritten from the checkpoint), snapshots.h5 keeps the frames up
+// to it, and the run gives the same results and files as one that did not stop.
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt);
 
 // Validates a case file and its mesh without running it; returns a short report (counts, mesh
