@@ -1,7 +1,9 @@
 // fdem: command line front end. Exit status: 0 ok, 1 unexpected error, 2 bad input, 3 numerical
-// failure (instability, non-finite state).
+// failure (instability, non-finite state), 130 / 143 a run stopped by SIGINT / SIGTERM (128 +
+// the signal's number) after it wrote a checkpoint and summary.json (stop reason "interrupted").
 #include <unistd.h>
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -54,6 +56,33 @@ void reexec_with_thread_binding(char** argv) {
   }
 }
 
+// The signal that asks a run to stop (0: none). The handler only sets it; the run loop reads it
+// once per step (RunOptions::interrupt).
+volatile std::sig_atomic_t g_interrupt = 0;
+
+extern "C" void on_interrupt(int sig) { g_interrupt = sig; }
+
+// SIGINT and SIGTERM end a run after its current step with a checkpoint and summary.json. The
+// handler is reset by its first signal, so a second one stops the process at once. A signal the
+// process was started with ignored (SIGINT of a background job of a script) stays ignored.
+void watch_interrupts() {
+  struct sigaction sa {};
+  sa.sa_handler = on_interrupt;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART | SA_RESETHAND;
+  for (int sig : {SIGINT, SIGTERM}) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaction(sig, &sa, nullptr);
+  }
+}
+
+const char* const kExitStatusHelp =
+    "Exit status: 0 ok, 1 unexpected error, 2 bad input (the message names the file), 3 numerical "
+    "failure, 130 / 143 a run stopped by SIGINT / SIGTERM: it finished its step and wrote "
+    "OUT/checkpoint.h5 and OUT/summary.json (go on with --restart OUT/checkpoint.h5); a second "
+    "signal stops it at once.";
+
 // What the command line asks for.
 struct CliOptions {
   std::string case_path, out_dir;
@@ -78,7 +107,9 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
                   "output.checkpoint_every; 0: none)")
       ->check(CLI::NonNegativeNumber);
   run->add_option("--restart", o.restart,
-                  "go on from a checkpoint written by --checkpoint-every (same case and --set options)");
+                  "go on from a checkpoint written by --checkpoint-every or by a run stopped by SIGINT / "
+                  "SIGTERM (same case and --set options)");
+  run->footer(kExitStatusHelp);
 
   auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");
   check->add_option("case", o.case_path, "case file (JSON)")->required();
@@ -102,9 +133,11 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       opt.progress = !o.quiet;
       opt.checkpoint_every = o.checkpoint_every;
       opt.restart = o.restart;
+      opt.interrupt = &g_interrupt;
       if (o.kernel_times) fdem::kernel_times::enable();
-      fdem::run_case(o.case_path, opt);
+      const auto summary = fdem::run_case(o.case_path, opt);
       if (o.kernel_times) fdem::kernel_times::print();
+      if (summary.value("stop_reason", "") == "interrupted") return 128 + summary.value("signal", 0);
     }
   } catch (const fdem::InputError& e) {
     // Name the case file in every message (mesh generator errors, for one, do not).
@@ -130,6 +163,7 @@ int main(int argc, char** argv) {
   CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);
+  app.footer(kExitStatusHelp);
   CliOptions opts;
   add_subcommands(app, opts);
 
@@ -146,5 +180,6 @@ int main(int argc, char** argv) {
   }
 
   Kokkos::ScopeGuard guard(argc, argv);
+  if (app.got_subcommand("run")) watch_interrupts();
   return dispatch(app, opts);
 }

@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <string>
 
 #include "common/error.hpp"
@@ -25,7 +26,11 @@ namespace {
 
 const char* kFormat = "fdem checkpoint";
 // 2: contact pairs carry a penetration allowance (contact/pair_g0)
-constexpr int kVersion = 2;
+// 3: every dataset carries an FNV-1a 64 checksum of its values (attribute "checksum") and the root
+//    one of the header and the dataset list; run/fragment_rows. Earlier versions are refused: they
+//    cannot be verified, and their restart would lose fragments.csv's rows.
+constexpr int kVersion = 3;
+const char* kChecksum = "checksum";
 
 using h5::Id;
 
@@ -92,7 +97,30 @@ void scalar_attr(hid_t loc, const char* name, hid_t ftype, hid_t mtype, T v, con
 struct VisitData {
   StateArrays* s;
   std::string error;
+  std::map<std::string, std::string> checksums;  // of every dataset, verified
 };
+
+// The checksum of a dataset: FNV-1a 64 of its values' bytes in memory (float64 / int64 of a
+// little-endian host: the file's types) or of the string's characters, as 16 hex digits.
+std::string values_checksum(const void* data, size_t bytes) { return hash_hex(data, bytes); }
+
+// The root checksum: the header's values, then every dataset's name and checksum in name order,
+// so that an altered header attribute or a dataset removed or added shows too.
+std::string root_checksum(const CheckpointHeader& h, int version,
+                          const std::map<std::string, std::string>& datasets) {
+  std::string text = std::string(kFormat) + '\n' + std::to_string(version) + '\n' + std::to_string(h.dim) +
+                     ' ' + std::to_string(h.nodes) + ' ' + std::to_string(h.elements) + ' ' +
+                     std::to_string(h.interfaces) + '\n' + h.case_hash + '\n' + h.mesh_hash + '\n' +
+                     std::to_string(h.step) + '\n';
+  uint64_t x = fnv1a(&h.time, sizeof h.time, fnv1a(text.data(), text.size()));
+  for (const auto& [name, sum] : datasets) {
+    x = fnv1a(name.c_str(), name.size() + 1, x);
+    x = fnv1a(sum.data(), sum.size(), x);
+  }
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
+  return buf;
+}
 
 herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) {
   auto* vd = static_cast<VisitData*>(data);
@@ -132,6 +160,29 @@ herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) 
     vd->error = std::string("cannot read '") + name + "'";
     return -1;
   }
+  // the checksum of the values read (a flipped bit in the data reads back without an HDF5 error)
+  std::string sum;
+  if (cls == H5T_FLOAT) {
+    const auto& v = vd->s->f64[name];
+    sum = values_checksum(v.data(), v.size() * sizeof(double));
+  } else if (cls == H5T_INTEGER) {
+    const auto& v = vd->s->i64[name];
+    sum = values_checksum(v.data(), v.size() * sizeof(long long));
+  } else {
+    const auto& v = vd->s->str[name];
+    sum = values_checksum(v.data(), v.size());
+  }
+  std::string stored;
+  if (!h5::read_string_attr(d, kChecksum, stored)) {
+    vd->error = std::string("dataset '") + name + "' has no checksum";
+    return -1;
+  }
+  if (stored != sum) {
+    vd->error = std::string("dataset '") + name + "' fails its checksum (stored " + stored + ", computed " +
+                sum + ")";
+    return -1;
+  }
+  vd->checksums[name] = sum;
   return 0;
 }
 
@@ -225,8 +276,9 @@ void write_header(hid_t f, const CheckpointHeader& h, const std::string& path) {
 }
 
 // One dataset per state entry, at its name (intermediate groups created): float64, int64, then
-// fixed-length string scalars.
-void write_datasets(hid_t f, const StateArrays& s, const Writing& w) {
+// fixed-length string scalars; each with its checksum, also put into `sums` (by name).
+void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
+                    std::map<std::string, std::string>& sums) {
   Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
   H5Pset_create_intermediate_group(lcpl.get(), 1);
   const size_t total = s.f64.size() + s.i64.size() + s.str.size();
@@ -241,6 +293,8 @@ void write_datasets(hid_t f, const StateArrays& s, const Writing& w) {
     if (!d.ok()) w.fail("cannot create dataset '" + name + "'");
     if (n > 0 && H5Dwrite(d.get(), mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
       w.fail("cannot write dataset '" + name + "'");
+    sums[name] = values_checksum(data, n * 8);  // float64 / int64
+    string_attr(d.get(), kChecksum, sums[name], w.path);
     one_more();
   };
   for (const auto& [name, v] : s.f64) dataset(name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.size(), v.data());
@@ -253,6 +307,8 @@ void write_datasets(hid_t f, const StateArrays& s, const Writing& w) {
     const std::string buf = v.empty() ? std::string(1, '\0') : v;
     if (!d.ok() || H5Dwrite(d.get(), t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
       w.fail("cannot write dataset '" + name + "'");
+    sums[name] = values_checksum(v.data(), v.size());
+    string_attr(d.get(), kChecksum, sums[name], w.path);
     one_more();
   }
 }
@@ -264,7 +320,9 @@ void write_tmp(const CheckpointHeader& h, const StateArrays& s, const Writing& w
   if (!file.ok()) w.fail("cannot create " + w.tmp);
   try {
     write_header(file.get(), h, w.path);
-    write_datasets(file.get(), s, w);
+    std::map<std::string, std::string> sums;
+    write_datasets(file.get(), s, w, sums);
+    string_attr(file.get(), kChecksum, root_checksum(h, kVersion, sums), w.path);
   } catch (...) {
     H5Fclose(file.release());
     std::remove(w.tmp.c_str());
@@ -326,7 +384,11 @@ StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h) {
     throw InputError("restart file '" + path + "' is an HDF5 file but not an fdem checkpoint");
   if (!h5::read_scalar_attr(f, "version", H5T_NATIVE_INT, version) || version != kVersion)
     throw InputError("restart file '" + path + "' is a checkpoint of format version " +
-                     std::to_string(version) + "; this fdem reads version " + std::to_string(kVersion));
+                     std::to_string(version) + "; this fdem reads version " + std::to_string(kVersion) +
+                     (version > 0 && version < 3
+                          ? " (earlier versions carry no checksum and are not accepted: start the run "
+                            "again, or finish it with the fdem that wrote the checkpoint)"
+                          : ""));
   bool ok = h5::read_scalar_attr(f, "dimension", H5T_NATIVE_INT, h.dim) &&
             h5::read_scalar_attr(f, "num_nodes", H5T_NATIVE_LLONG, h.nodes) &&
             h5::read_scalar_attr(f, "num_elements", H5T_NATIVE_LLONG, h.elements) &&
@@ -338,10 +400,16 @@ StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h) {
   if (!ok) throw InputError("restart file '" + path + "': checkpoint header is incomplete" + reason());
   StateArrays s;
   s.file = path;
-  VisitData vd{&s, {}};
+  VisitData vd{&s, {}, {}};
   if (H5Lvisit(f, H5_INDEX_NAME, H5_ITER_INC, visit_link, &vd) < 0)
     throw InputError("restart file '" + path + "' is damaged: " +
                      (vd.error.empty() ? std::string("cannot list its contents") : vd.error) + reason());
+  std::string stored;
+  if (!h5::read_string_attr(f, kChecksum, stored))
+    throw InputError("restart file '" + path + "' is damaged: the file has no checksum");
+  if (stored != root_checksum(h, version, vd.checksums))
+    throw InputError("restart file '" + path +
+                     "' is damaged: the header or the list of datasets fails the checksum");
   return s;
 }
 

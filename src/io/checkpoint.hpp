@@ -6,9 +6,11 @@
 // checkpoint.h5 layout:
 //   /  attributes: format = "fdem checkpoint", version (int32), dimension, num_nodes, num_elements,
 //      num_interfaces (int64), case_hash, mesh_hash (strings, 16 hex digits), time (float64),
-//      step (int64)
+//      step (int64), checksum (string: FNV-1a 64 of the header values and of every dataset's name
+//      and checksum, in name order)
 //   one dataset per state entry, at its name ("model/x", "contact/pair_fn", "run/next_history",
-//   ...): float64 or int64, one-dimensional; strings as fixed-length string scalars.
+//   ...): float64 or int64, one-dimensional; strings as fixed-length string scalars. Each has the
+//   attribute checksum (FNV-1a 64 of its values' bytes, 16 hex digits).
 #include <cstdint>
 #include <map>
 #include <string>
@@ -56,8 +58,9 @@ uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 1469598103934665603u
 // writing the N-th checkpoint of this process (half of the datasets written) or right after it.
 void write_checkpoint(const std::string& path, const CheckpointHeader& h, const StateArrays& s);
 
-// Reads a checkpoint. Throws InputError naming `path` when it is missing, not HDF5 or not a
-// checkpoint of this format.
+// Reads a checkpoint. Throws InputError naming `path` when it is missing, not HDF5, not a
+// checkpoint of this format version, or damaged: a dataset whose values fail their checksum (the
+// message names the dataset), a header or dataset list that fails the root checksum.
 StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h);
 
 }  // namespace fdem

@@ -1,5 +1,6 @@
 #pragma once
 // Host orchestration of a run: case -> mesh -> interfaces -> device model -> time loop -> output.
+#include <csignal>
 #include <string>
 #include <vector>
 
@@ -13,15 +14,19 @@ struct RunOptions {
   bool progress = true;               // progress line on a terminal / periodic lines in logs
   double checkpoint_every = -1;       // s of simulated time; < 0: the case's output.checkpoint_every
   std::string restart;                // checkpoint to go on from (same case and --set options)
+  // Set (to the signal's number) by a signal handler to stop the run: the loop reads it once per
+  // step on the host; the run then ends after the step with a checkpoint and summary.json (stop
+  // reason "interrupted", "signal" the number). Null: not watched.
+  const volatile std::sig_atomic_t* interrupt = nullptr;
 };
 
 // Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,
 // a restart file that is missing, damaged or of another case, an output file that cannot be
 // written) or NumericalError (instability), both with a clear message.
 // With a checkpoint interval the run writes out_dir/checkpoint.h5 (atomically) every that much
-// simulated time; with `restart` it goes on from such a file: history.csv keeps the rows up to the
-// checkpoint (rewritten from the checkpoint), snapshots.h5 keeps the frames up to it, and the run
-// gives the same results as one that did not stop.
+// simulated time; with `restart` it goes on from such a file: history.csv and fragments.csv keep
+// the rows up to the checkpoint (rewritten from the checkpoint), snapshots.h5 keeps the frames up
+// to it, and the run gives the same results and files as one that did not stop.
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt);
 
 // Validates a case file and its mesh without running it; returns a short report (counts, mesh

@@ -1,6 +1,7 @@
 #include "solver/run_loop.hpp"
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 
 #include "io/output.hpp"
@@ -28,18 +29,19 @@ RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out,
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
   if (restart) sim_.load_state(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
-  if (c.output_fragments && sim_.m.ni > 0) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
   if (restart) {
     restore(*restart);
   } else {
     history_->open(out, false);
+    if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, mesh, nullptr);
   }
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
 }
 
-// The run loop's state from the checkpoint; history.csv and snapshots.h5 cut back to it.
+// The run loop's state from the checkpoint; history.csv, fragments.csv and snapshots.h5 cut back
+// to it.
 template <int D>
 void RunLoop<D>::restore(const StateArrays& r) {
   RunState s;
@@ -51,6 +53,7 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   history_->open(out_, true);
+  if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
   snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, mesh_, &s);
 }
 
@@ -81,6 +84,10 @@ nlohmann::json RunLoop<D>::run() {
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
+    if (opt_.interrupt && *opt_.interrupt) {  // a signal (SIGINT, SIGTERM): stop after this step
+      signal_ = static_cast<int>(*opt_.interrupt);
+      return interrupted();
+    }
     if (c_.max_steps > 0 && sim_.step_count >= c_.max_steps) {
       stop_reason = "max_steps";
       break;
@@ -102,6 +109,25 @@ nlohmann::json RunLoop<D>::run() {
   if (!schedule_.last_was_row()) final_row();
   snaps_->take(sim_, frag_.get());
   return finish(stop_reason, loop_wall);
+}
+
+// The run stopped by a signal after a step: a checkpoint of this moment (a restart goes on as if
+// the run had not stopped), a snapshot (dropped by such a restart), summary.json, a message. No
+// final history row: it would take one more step.
+template <int D>
+nlohmann::json RunLoop<D>::interrupted() {
+  const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
+  progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
+  progress_->done();
+  save_checkpoint();
+  snaps_->take(sim_, frag_.get());
+  const std::string ck = out_ + "/checkpoint.h5";
+  const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
+  std::fprintf(stderr,
+               "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
+               "run %s --restart %s (and the same --set options)\n",
+               name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str());
+  return finish("interrupted", loop_wall);
 }
 
 // One step; `row`: sampled for a history row (reactions too), `check`: energies sampled and the
@@ -147,6 +173,7 @@ void RunLoop<D>::save_checkpoint() {
   sim_.save_state(st);
   RunState s;
   history_->save(s);
+  if (frag_) frag_->save(s);
   schedule_.save(s);
   snaps_->save(s);
   s.wall_seconds = prior_wall_ + seconds(c0 - wall0_);
@@ -182,6 +209,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoint_seconds = ckpt_wall_;
   r.checkpoints_written = ckpt_written_;
   r.restart = restart_;
+  r.signal = signal_;
   const nlohmann::json summary = run_summary(c_, mesh_, sim_, *history_, frag_.get(), r);
   write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   print_run_end(summary, r, sim_.step_count, opt_.progress);

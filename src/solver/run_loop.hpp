@@ -38,6 +38,8 @@ class RunLoop {
   bool history_row();  // true when the stop rule is met
   void final_row();
   void save_checkpoint();
+  nlohmann::json interrupted();
+  bool fragments_on() const { return c_.output_fragments && sim_.m.ni > 0; }
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
@@ -58,6 +60,7 @@ class RunLoop {
   // wall times of the processes before this one (restart), checkpoint writing
   double prior_wall_ = 0, prior_loop_wall_ = 0, ckpt_wall_ = 0;
   long ckpt_written_ = 0;
+  int signal_ = 0;  // the signal that stopped the run (0: none)
 };
 
 // run_case's run of a prepared case in dimension D.

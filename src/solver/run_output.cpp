@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "common/error.hpp"
+
 namespace fdem {
 
 // ---- OutputSchedule ----
@@ -67,8 +69,22 @@ std::vector<std::string> fragment_columns() {
 }  // namespace
 
 template <int D>
-RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out)
-    : analysis_(m), csv_(out + "/fragments.csv", fragment_columns()) {}
+RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out, const RunState* restart,
+                              const std::string& file)
+    : analysis_(m) {
+  const std::vector<std::string> cols = fragment_columns();
+  const std::string path = out + "/fragments.csv";
+  if (!restart) {
+    csv_ = std::make_unique<HistoryWriter>(path, cols);
+    return;
+  }
+  rows_ = restart->fragment_rows;
+  if (rows_.size() % cols.size() != 0)
+    throw InputError("checkpoint '" + file + "': run/fragment_rows has " + std::to_string(rows_.size()) +
+                     " values, not whole rows of the " + std::to_string(cols.size()) +
+                     " fragments.csv columns (the file is damaged)");
+  csv_ = std::make_unique<HistoryWriter>(path, cols, rows_);
+}
 
 template <int D>
 const FragmentStats& RunFragments<D>::now(const Simulation<D>& sim) {
@@ -87,7 +103,8 @@ void RunFragments<D>::write_row(const Simulation<D>& sim, const Energies& e) {
                             double(fs.single_element)};
   for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_count[b]);
   for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_mass_fraction[b]);
-  csv_.row(fr);
+  csv_->row(fr);
+  rows_.insert(rows_.end(), fr.begin(), fr.end());
 }
 
 template <int D>

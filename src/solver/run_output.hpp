@@ -49,18 +49,23 @@ class OutputSchedule {
 template <int D>
 class RunFragments {
  public:
-  // Starts out/fragments.csv.
-  RunFragments(const Model<D>& m, const std::string& out);
+  // Starts out/fragments.csv; restart: rewrites it with the checkpoint's rows (those a killed run
+  // wrote after the checkpoint are dropped), then goes on. Throws InputError naming the checkpoint
+  // `file` when its rows do not fit the columns.
+  RunFragments(const Model<D>& m, const std::string& out, const RunState* restart = nullptr,
+               const std::string& file = "");
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
   // The row of the instant `e` of the last history row (the present state).
   void write_row(const Simulation<D>& sim, const Energies& e);
   void element_ids(const Simulation<D>& sim, std::vector<int>& ids);
   nlohmann::json summary(const Simulation<D>& sim);
+  void save(RunState& s) const { s.fragment_rows = rows_; }
 
  private:
   FragmentAnalysis<D> analysis_;
-  HistoryWriter csv_;
+  std::unique_ptr<HistoryWriter> csv_;
+  std::vector<double> rows_;  // every row so far (row-major), for checkpoints
   long step_ = -1;  // the step the statistics are of
 };
 

@@ -18,6 +18,7 @@ void RunState::fields(Self& s, F&& f, long long platens) {
   f("run/last_was_row", s.last_was_row, 1);
   f("run/last_snapshot_step", s.last_snapshot_step, 1);
   f("run/history_rows", s.history_rows, -1);
+  f("run/fragment_rows", s.fragment_rows, -1);
   f("run/wall_seconds", s.wall_seconds, 1);
   f("run/loop_wall_seconds", s.loop_wall_seconds, 1);
   f("run/checkpoint_seconds", s.checkpoint_seconds, 1);

@@ -17,6 +17,7 @@ struct RunIdentity {
 struct RunState {
   std::string history_columns;        // one column name per line
   std::vector<double> history_rows;   // every history row so far (row-major)
+  std::vector<double> fragment_rows;  // every fragments.csv row so far (row-major; empty without)
   double next_history = 0, next_snapshot = 0, next_checkpoint = 0;
   double checkpoint_every = 0;        // the interval the checkpoint was written with
   std::vector<double> peak_load, peak_displacement;  // per platen

@@ -125,6 +125,7 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   summary["steps"] = sim.step_count;
   summary["end_time_s"] = sim.t;
   summary["stop_reason"] = r.stop_reason;
+  if (r.signal) summary["signal"] = r.signal;
   summary["wall_seconds"] = r.wall_seconds;
   summary["loop_wall_seconds"] = r.loop_wall_seconds;
   summary["element_steps_per_second"] =
@@ -138,7 +139,8 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct);
   if (frag) summary["fragments"] = frag->summary(sim);
   summary["results"] = results_report(c, sim, history);
-  if (r.checkpoint_every > 0 || r.restart) summary["checkpoint"] = checkpoint_report(r);
+  if (r.checkpoint_every > 0 || r.restart || r.checkpoints_written > 0)
+    summary["checkpoint"] = checkpoint_report(r);
   summary["outputs"] = {{"history", r.out + "/history.csv"},
                         {"summary", r.out + "/summary.json"},
                         {"case", r.out + "/case.json"}};

@@ -28,6 +28,7 @@ struct RunRecord {
   std::string out;  // output folder
   int boundary_nodes = 0;  // before contact adds crack faces to the platens' nodes
   std::string stop_reason;
+  int signal = 0;                                  // stop reason "interrupted": the signal's number
   double wall_seconds = 0, loop_wall_seconds = 0;  // all processes of the run
   bool snapshots = false;
   // checkpoints: an entry when they are written or the run restarted
