@@ -77,7 +77,7 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   Case c = load_case(case_path, opt.overrides);
-  if (opt.checkpoint_every >= 0 && !std::isfinite(opt.checkpoint_every))
+  if (!std::isfinite(opt.checkpoint_every))  // NaN too
     throw InputError("--checkpoint-every must be a finite time in seconds");
   StateArrays restart;
   CheckpointHeader header;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "common/error.hpp"
+
 namespace fdem {
 
 // ---- OutputSchedule ----
@@ -31,6 +33,17 @@ bool OutputSchedule::take_checkpoint(double t) {
   if (!(ckpt_dt_ > 0 && t >= next_ckpt_ * (1 - 1e-12))) return false;
   while (next_ckpt_ <= t * (1 + 1e-12)) next_ckpt_ += ckpt_dt_;
   return true;
+}
+
+void OutputSchedule::check_checkpoint_interval(double dt, const std::string& source,
+                                               const std::string& file) const {
+  if (ckpt_dt_ == 0 || (std::isfinite(ckpt_dt_) && ckpt_dt_ >= dt)) return;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "%s = %.4g s is not 0 (no checkpoints) or a finite time of at least one step "
+                "(dt = %.4g s)",
+                source.c_str(), ckpt_dt_, dt);
+  throw InputError(file + ": " + buf);
 }
 
 void OutputSchedule::save(RunState& s) const {
