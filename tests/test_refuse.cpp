@@ -64,6 +64,10 @@ TEST(Refuse, GeoSizeThatCannotBeMeshedIsRefused) {
   EXPECT_TRUE(has(r, "e+21 elements")) << r.out;  // area ~1885 m^2 / (1e-9 m)^2
   EXPECT_TRUE(has(r, "give mesh.element_size >= ")) << r.out;
   EXPECT_FALSE(has(r, "case OK")) << r.out;
+  // without the memory check, the mesh Gmsh makes (6 elements) is refused as not honouring the size
+  const Result m = fdem("check " + kSlope + " --set parameters.h=1e-9", "FDEM_MEMORY_CHECK=off");
+  EXPECT_EQ(m.rc, 2) << m.out;
+  EXPECT_TRUE(has(m, "Gmsh did not honour mesh.element_size = 1e-09 m: its mesh has 6 elements")) << m.out;
 }
 
 // Item 8: cell = 1e-5 allocated until std::bad_alloc (exit 1). Now: 4 x 5000 x 10000 = 2e8

@@ -140,7 +140,7 @@ std::string lower_ext(const std::string& path) {
 // reports the signal with Gmsh's last messages as an InputError. The child's address space is
 // capped at the memory available (memory_budget.hpp), so that a mesh too large for the machine
 // stops Gmsh instead of the machine. Cost: one fork and a copy of the mesh through the pipe
-// (docs/developing.md, "Gmsh in a child process").
+// (docs/developing.md, "Refusals").
 
 void put_raw(std::string& b, const void* p, std::size_t n) {
   if (n) b.append(static_cast<const char*>(p), n);
@@ -319,7 +319,7 @@ std::string signal_name(int sig) {
   }
 }
 
-// Runs work(terminal) -> Extracted in a Gmsh session in a child process (in this process if no
+// Runs work() -> Extracted in a Gmsh session in a child process (in this process if no
 // child can be made); Gmsh errors, crashes and aborts become InputError naming `source`.
 template <class F>
 Extracted run_gmsh_isolated(const std::string& source, const std::string& doing, F&& work) {

@@ -123,13 +123,14 @@ MemoryBudget available_memory() {
 // less that of the smallest mesh, per element, measured with /usr/bin/time -v on
 // cases/uniaxial_compression (2D: 3200 -> 51200 elements) and cases/particle_impact_3d (3D), and
 // rounded up with 50 % headroom for contact pair lists that grow as a body fragments. Gmsh's own
-// peak while meshing a disc or sphere is below it. Figures: docs/developing.md ("Memory budget").
+// peak while meshing a disc or sphere is below it. Figures: docs/developing.md, "Refusals".
 double bytes_per_element(int dim) { return dim == 2 ? 2700.0 : 4300.0; }
 
-// Elements per (measure / h^dim) that Gmsh made with the generators' settings (gmsh_io.cpp):
-// discs R / h = 10 .. 100, spheres R / h = 5 .. 12 (docs/developing.md, "Memory budget").
+// Elements per (measure / h^dim) that Gmsh made with the generators' settings (gmsh_io.cpp), the
+// largest counted: discs R / h = 17, 50, 100: 2.70, 2.67, 2.60; spheres R / h = 8.3, 10, 16.7:
+// 5.19, 4.86, 4.65 (docs/developing.md, "Refusals").
 double estimate_gmsh_elements(int dim, double measure, double h) {
-  const double per_measure = dim == 2 ? 2.3 : 8.5;
+  const double per_measure = dim == 2 ? 2.7 : 5.2;
   return per_measure * measure / std::pow(h, dim);
 }
 

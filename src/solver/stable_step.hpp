@@ -51,9 +51,9 @@ struct TimeStep {
 // time.dt stays the limit.
 TimeStep decide_stable_step(const StepContributions& c, bool contact_now = false, double dt_now = 0);
 
-// Most steps a run may take: 1e12. At the fastest step measured (the 40-element bar of
-// tests/data/cases/bar.json, about 2 microseconds a step on one core) that is about a month; a
-// mesh of any size takes far longer, so a longer run cannot finish (docs/developing.md).
+// Most steps a run may take: 1e12. The smallest test case (the 40-element bar of
+// tests/data/cases/bar.json) takes about 45 microseconds a step on one core (docs/developing.md,
+// "Refusals"): 1e12 steps would take it about 1.4 years, and any real mesh longer.
 inline constexpr double kMaxRunSteps = 1e12;
 
 // Refuses (InputError naming `file` and the numbers) a time step dt that is not positive and
