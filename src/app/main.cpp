@@ -3,6 +3,7 @@
 // the signal's number) after it wrote a checkpoint and summary.json (stop reason "interrupted").
 #include <unistd.h>
 
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -93,6 +94,20 @@ struct CliOptions {
   std::string restart;
 };
 
+// A finite time >= 0 in seconds, with a short message (CLI11's NonNegativeNumber prints the whole
+// range of a double).
+CLI::Validator seconds_validator() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !std::isfinite(v) || v < 0)
+          return "'" + text + "' is not a time in seconds (give a finite number >= 0; 0: no checkpoints)";
+        return "";
+      },
+      "SECONDS");
+}
+
 // The subcommands run, check and info with their options, stored into `o`.
 void add_subcommands(CLI::App& app, CliOptions& o) {
   auto* run = app.add_subcommand("run", "run a case");
@@ -105,7 +120,7 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   run->add_option("--checkpoint-every", o.checkpoint_every,
                   "write OUT/checkpoint.h5 every this many seconds of simulated time (overrides "
                   "output.checkpoint_every; 0: none)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(seconds_validator());
   run->add_option("--restart", o.restart,
                   "go on from a checkpoint written by --checkpoint-every or by a run stopped by SIGINT / "
                   "SIGTERM (same case and --set options)");

@@ -2,14 +2,26 @@
 // generators (disc, sphere) through the Gmsh C++ API. The model's mesh becomes a HostMesh in
 // gmsh_extract.cpp.
 #include <gmsh.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
+#include <new>
+#include <unordered_map>
 
 #include "common/error.hpp"
+#include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
 #include "mesh/mesh_internal.hpp"
 #include "mesh/msh_check.hpp"
@@ -20,8 +32,9 @@ namespace {
 
 using namespace mesh_detail;
 
-// The Gmsh API is one global state: one session at a time, always finalized. Terminal output is
-// off; messages go to Gmsh's logger, whose "Error" lines we turn into InputError. Gmsh 4.8 reports
+// The Gmsh API is one global state: one session at a time (run_gmsh_isolated holds the mutex),
+// always finalized. Messages go to Gmsh's logger, whose "Error" lines we turn into InputError, and
+// in a child process also to its terminal output, which the parent captures (see below). Gmsh 4.8 reports
 // errors by throwing std::string (newer versions throw std::exception) when General.AbortOnError
 // is 2 (the API default). While the .geo/.msh parser runs we set it to 0: an exception thrown from
 // inside Gmsh's parser leaves the parser's global state broken for the rest of the process (every
@@ -33,10 +46,10 @@ std::mutex& gmsh_mutex() {
 
 class GmshSession {
  public:
-  GmshSession() : lock_(gmsh_mutex()) {
+  explicit GmshSession(bool terminal) {
     gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
     try {
-      gmsh::option::setNumber("General.Terminal", 0);
+      gmsh::option::setNumber("General.Terminal", terminal ? 1 : 0);
       gmsh::option::setNumber("General.NumThreads", 1);
       gmsh::logger::start();
     } catch (...) {
@@ -65,6 +78,15 @@ class GmshSession {
     return "";
   }
 
+  // Forget the messages logged so far (after a trial meshing whose errors do not count).
+  static void clear_log() {
+    try {
+      gmsh::logger::stop();
+      gmsh::logger::start();
+    } catch (...) {
+    }
+  }
+
  private:
   static void finish() {
     try {
@@ -76,7 +98,6 @@ class GmshSession {
     } catch (...) {
     }
   }
-  std::lock_guard<std::mutex> lock_;
 };
 
 // Run a function that calls Gmsh; turn Gmsh's errors into InputError naming `source`.
@@ -109,6 +130,414 @@ std::string lower_ext(const std::string& path) {
   return ext;
 }
 
+// ---- Gmsh in a child process ----
+// Gmsh can abort the whole process: an error thrown inside its OpenMP regions ends in
+// std::terminate (a .geo surface of zero area), and an assertion or an allocation failure in a
+// mesher does the same. So every Gmsh session runs in a forked child: it meshes, turns the model
+// into an Extracted, and sends that (or an error message) back through a pipe; its terminal output
+// (Gmsh's Info/Warning/Error lines, and what the C++ runtime prints when it aborts) goes to an
+// unlinked temporary file. The parent reads the pipe, reaps the child and, if the child died,
+// reports the signal with Gmsh's last messages as an InputError. The child's address space is
+// capped at the memory available (memory_budget.hpp), so that a mesh too large for the machine
+// stops Gmsh instead of the machine. Cost: one fork and a copy of the mesh through the pipe
+// (docs/developing.md, "Refusals").
+
+void put_raw(std::string& b, const void* p, std::size_t n) {
+  if (n) b.append(static_cast<const char*>(p), n);
+}
+template <class T>
+void put(std::string& b, const T& v) {
+  put_raw(b, &v, sizeof v);
+}
+template <class T>
+void put_vec(std::string& b, const std::vector<T>& v) {
+  put<std::uint64_t>(b, v.size());
+  put_raw(b, v.data(), v.size() * sizeof(T));
+}
+void put_str(std::string& b, const std::string& s) {
+  put<std::uint64_t>(b, s.size());
+  put_raw(b, s.data(), s.size());
+}
+
+struct Unpacker {
+  const std::string& b;
+  std::size_t pos = 1;  // after the kind byte
+  void raw(void* p, std::size_t n) {
+    if (n > b.size() - pos) throw std::runtime_error("truncated mesh data from the Gmsh process");
+    if (n) std::memcpy(p, b.data() + pos, n);
+    pos += n;
+  }
+  template <class T>
+  T get() {
+    T v;
+    raw(&v, sizeof v);
+    return v;
+  }
+  std::size_t count(std::size_t elem_size) {
+    const auto n = get<std::uint64_t>();
+    if (n > (b.size() - pos) / elem_size) throw std::runtime_error("bad mesh data from the Gmsh process");
+    return static_cast<std::size_t>(n);
+  }
+  template <class T>
+  std::vector<T> vec() {
+    std::vector<T> v(count(sizeof(T)));
+    raw(v.data(), v.size() * sizeof(T));
+    return v;
+  }
+  std::string str() {
+    std::string s(count(1), '\0');
+    raw(s.data(), s.size());
+    return s;
+  }
+};
+
+void pack(std::string& b, const Extracted& ex) {
+  const HostMesh& m = ex.mesh;
+  put<std::int32_t>(b, m.dim);
+  put_vec(b, m.X);
+  put_vec(b, m.elems);
+  put_vec(b, m.elem_region);
+  put<std::uint64_t>(b, m.region_names.size());
+  for (const auto& r : m.region_names) put_str(b, r);
+  put<std::uint64_t>(b, m.node_sets.size());
+  for (const auto& [name, nodes] : m.node_sets) {
+    put_str(b, name);
+    put_vec(b, nodes);
+  }
+  put_vec(b, m.ifaces);
+  put_vec(b, m.iface_elems);
+  put_vec(b, m.node_origin);
+  std::vector<std::uint64_t> tags(ex.elem_tags.begin(), ex.elem_tags.end());
+  put_vec(b, tags);
+}
+
+Extracted unpack(const std::string& b) {
+  Unpacker u{b};
+  Extracted ex;
+  HostMesh& m = ex.mesh;
+  m.dim = u.get<std::int32_t>();
+  m.X = u.vec<double>();
+  m.elems = u.vec<int>();
+  m.elem_region = u.vec<int>();
+  for (std::size_t i = 0, n = u.count(8); i < n; ++i) m.region_names.push_back(u.str());
+  for (std::size_t i = 0, n = u.count(16); i < n; ++i) {
+    std::string name = u.str();
+    m.node_sets[name] = u.vec<int>();
+  }
+  m.ifaces = u.vec<int>();
+  m.iface_elems = u.vec<int>();
+  m.node_origin = u.vec<int>();
+  const auto tags = u.vec<std::uint64_t>();
+  ex.elem_tags.assign(tags.begin(), tags.end());
+  return ex;
+}
+
+void write_all(int fd, const std::string& b) {
+  std::size_t done = 0;
+  while (done < b.size()) {
+    const ssize_t n = ::write(fd, b.data() + done, b.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return;
+    done += static_cast<std::size_t>(n);
+  }
+}
+
+std::string read_all(int fd) {
+  std::string b;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    b.append(buf, static_cast<std::size_t>(n));
+  }
+  return b;
+}
+
+// Gmsh's messages worth quoting from the child's terminal output: its Error lines and the last
+// lines (what the runtime printed when it aborted), at most ~1500 characters.
+std::string log_excerpt(std::FILE* log) {
+  if (!log) return "";
+  std::fflush(log);
+  std::rewind(log);
+  std::vector<std::string> lines, errors;
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, log)) {
+    std::string l(buf);
+    while (!l.empty() && (l.back() == '\n' || l.back() == '\r')) l.pop_back();
+    if (l.empty()) continue;
+    if (l.find("-----") != std::string::npos || l.find("error summary") != std::string::npos) continue;
+    if (l.rfind("Error", 0) == 0 && errors.size() < 3) errors.push_back(l);
+    lines.push_back(l);
+    if (lines.size() > 200) lines.erase(lines.begin(), lines.begin() + 100);
+  }
+  std::string out;
+  for (const auto& e : errors) out += (out.empty() ? "" : " | ") + e;
+  for (std::size_t i = lines.size() > 3 ? lines.size() - 3 : 0; i < lines.size(); ++i)
+    if (std::find(errors.begin(), errors.end(), lines[i]) == errors.end())
+      out += (out.empty() ? "" : " | ") + lines[i];
+  if (out.size() > 1500) out = out.substr(0, 1500) + " ...";
+  return out;
+}
+
+// In the child: no more address space than what is in use now plus the memory available.
+void cap_address_space() {
+  if (!std::isfinite(max_elements(2))) return;  // unknown, or FDEM_MEMORY_CHECK=off
+  const MemoryBudget b = available_memory();
+  std::ifstream st("/proc/self/status");
+  std::string line;
+  double vm = 0;
+  while (std::getline(st, line))
+    if (line.rfind("VmSize:", 0) == 0) vm = std::atof(line.c_str() + 7) * 1024.0;
+  rlimit rl{};
+  if (getrlimit(RLIMIT_AS, &rl) != 0) return;
+  const double cap = vm + b.bytes;
+  if (rl.rlim_cur == RLIM_INFINITY || cap < static_cast<double>(rl.rlim_cur)) {
+    rl.rlim_cur = static_cast<rlim_t>(cap);
+    setrlimit(RLIMIT_AS, &rl);
+  }
+}
+
+std::string signal_name(int sig) {
+  switch (sig) {
+    case SIGABRT:
+      return "SIGABRT";
+    case SIGSEGV:
+      return "SIGSEGV";
+    case SIGKILL:
+      return "SIGKILL";
+    case SIGBUS:
+      return "SIGBUS";
+    case SIGFPE:
+      return "SIGFPE";
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    default:
+      return "signal " + std::to_string(sig);
+  }
+}
+
+// Runs work() -> Extracted in a Gmsh session in a child process (in this process if no
+// child can be made); Gmsh errors, crashes and aborts become InputError naming `source`.
+template <class F>
+Extracted run_gmsh_isolated(const std::string& source, const std::string& doing, F&& work) {
+  std::lock_guard<std::mutex> lock(gmsh_mutex());
+  std::fflush(nullptr);
+  std::FILE* log = std::tmpfile();
+  int fds[2];
+  pid_t pid = -1;
+  if (::pipe(fds) == 0) {
+    pid = ::fork();
+    if (pid < 0) {
+      ::close(fds[0]);
+      ::close(fds[1]);
+    }
+  }
+  if (pid < 0) {  // no child: Gmsh in this process
+    if (log) std::fclose(log);
+    GmshSession session(false);
+    return work();
+  }
+  if (pid == 0) {  // the child: never returns, never runs the parent's exit handlers
+    ::close(fds[0]);
+    if (log) {
+      ::dup2(::fileno(log), 1);
+      ::dup2(::fileno(log), 2);
+      std::setvbuf(stdout, nullptr, _IONBF, 0);
+      std::setvbuf(stderr, nullptr, _IONBF, 0);
+    }
+    cap_address_space();
+    std::string out;
+    try {
+      Extracted ex;
+      {
+        GmshSession session(log != nullptr);
+        ex = work();
+      }
+      out = "M";
+      pack(out, ex);
+    } catch (const InputError& e) {
+      out = std::string("E") + e.what();
+    } catch (const std::bad_alloc&) {
+      out = "E" + source + ": Gmsh ran out of memory while trying to " + doing + " (" +
+            std::to_string(available_memory().bytes / 1073741824.0) + " GiB available)";
+    } catch (const std::exception& e) {
+      out = std::string("X") + e.what();
+    } catch (...) {
+      out = "Xunknown error";
+    }
+    write_all(fds[1], out);
+    ::close(fds[1]);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  const std::string data = read_all(fds[0]);
+  ::close(fds[0]);
+  int status = 0;
+  rusage ru{};
+  while (::wait4(pid, &status, 0, &ru) < 0 && errno == EINTR) {
+  }
+  const std::string excerpt = log_excerpt(log);
+  if (log) std::fclose(log);
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && !data.empty()) {
+    if (data[0] == 'E') throw InputError(data.substr(1));
+    if (data[0] == 'X') throw InputError(source + ": Gmsh could not " + doing + ": " + data.substr(1));
+    if (data[0] == 'M') return unpack(data);
+  }
+  std::string how = WIFSIGNALED(status) ? "was killed by " + signal_name(WTERMSIG(status))
+                                        : "exited with status " + std::to_string(WEXITSTATUS(status));
+  char mem[96];
+  std::snprintf(mem, sizeof mem, " after using %.3g GiB (%.3g GiB available)",
+                static_cast<double>(ru.ru_maxrss) / 1048576.0, available_memory().bytes / 1073741824.0);
+  throw InputError(source + ": Gmsh failed while trying to " + doing + ": the meshing process " + how + mem +
+                   (excerpt.empty() ? std::string() : "; Gmsh's last messages: " + excerpt));
+}
+
+// ---- Sizes: refuse before meshing what cannot fit, and check that Gmsh honoured the size ----
+
+// Area (2D) or volume (3D) of the current mesh's elements of dimension dim (triangles,
+// tetrahedra), or total length and count of its line elements (dim 1).
+struct MeshMeasure {
+  double measure = 0;
+  std::size_t count = 0;
+};
+
+MeshMeasure measure_current_mesh(int dim) {
+  std::vector<std::size_t> ntags;
+  std::vector<double> xyz, uvw;
+  gmsh::model::mesh::getNodes(ntags, xyz, uvw, -1, -1, false, false);
+  std::unordered_map<std::size_t, std::size_t> at;
+  for (std::size_t i = 0; i < ntags.size(); ++i) at[ntags[i]] = 3 * i;
+  std::vector<int> types;
+  std::vector<std::vector<std::size_t>> etags, enodes;
+  gmsh::model::mesh::getElements(types, etags, enodes, dim, -1);
+  MeshMeasure mm;
+  auto p = [&](std::size_t tag) { return &xyz.at(at.at(tag)); };
+  for (std::size_t t = 0; t < types.size(); ++t) {
+    const int npe = types[t] == 1 ? 2 : types[t] == 2 ? 3 : types[t] == 4 ? 4 : 0;
+    if (npe == 0) continue;  // other element types: not counted
+    const auto& nd = enodes[t];
+    for (std::size_t e = 0; e + npe <= nd.size(); e += npe) {
+      const double* a = p(nd[e]);
+      double u[3][3] = {};
+      for (int k = 1; k < npe; ++k) {
+        const double* b = p(nd[e + k]);
+        for (int c = 0; c < 3; ++c) u[k - 1][c] = b[c] - a[c];
+      }
+      const double cx = u[0][1] * u[1][2] - u[0][2] * u[1][1], cy = u[0][2] * u[1][0] - u[0][0] * u[1][2],
+                   cz = u[0][0] * u[1][1] - u[0][1] * u[1][0];
+      if (npe == 2) mm.measure += std::sqrt(u[0][0] * u[0][0] + u[0][1] * u[0][1] + u[0][2] * u[0][2]);
+      if (npe == 3) mm.measure += 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+      if (npe == 4) mm.measure += std::abs(cx * u[2][0] + cy * u[2][1] + cz * u[2][2]) / 6.0;
+      ++mm.count;
+    }
+  }
+  return mm;
+}
+
+// A trial meshing of dimension d with sizes clamped to [lmin, lmax]; errors do not count, the mesh
+// and the log are cleared after it and the options restored. Returns count 0 if it failed.
+MeshMeasure trial_mesh(int d, double lmin, double lmax) {
+  const char* kMin = "Mesh.CharacteristicLengthMin";
+  const char* kMax = "Mesh.CharacteristicLengthMax";
+  double min0 = 0, max0 = 1e22, abort0 = 2;
+  gmsh::option::getNumber(kMin, min0);
+  gmsh::option::getNumber(kMax, max0);
+  gmsh::option::getNumber("General.AbortOnError", abort0);
+  MeshMeasure mm;
+  try {
+    gmsh::option::setNumber("General.AbortOnError", 0);  // an error is logged, not thrown
+    gmsh::option::setNumber(kMin, lmin);
+    gmsh::option::setNumber(kMax, lmax);
+    gmsh::model::mesh::generate(d);
+    if (GmshSession::first_error().empty()) mm = measure_current_mesh(d);
+  } catch (...) {
+    mm = MeshMeasure{};
+  }
+  try {
+    gmsh::model::mesh::clear();
+    gmsh::option::setNumber(kMin, min0);
+    gmsh::option::setNumber(kMax, max0);
+    gmsh::option::setNumber("General.AbortOnError", abort0);
+  } catch (...) {
+  }
+  GmshSession::clear_log();
+  return mm;
+}
+
+// Before a .geo file is meshed: its area (2D) or volume (3D) from a coarse trial mesh (the bounding
+// box if that fails), its element size (mesh.element_size, or less where the file's own sizes are
+// smaller: the mean segment of a trial 1D mesh, floored at 1e-5 of the model's diagonal), and from
+// them the element count; InputError if that cannot fit in memory.
+void refuse_oversized_geo(const std::string& path, int dim, double element_size) {
+  double lo[3], hi[3];
+  gmsh::model::getBoundingBox(-1, -1, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+  double ext[3], diag2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    ext[k] = hi[k] - lo[k];
+    diag2 += ext[k] * ext[k];
+  }
+  const double diag = std::sqrt(diag2);
+  if (!(diag > 0) || !std::isfinite(diag)) return;
+  const double cap = max_elements(dim);
+  if (!std::isfinite(cap)) return;  // unknown memory or FDEM_MEMORY_CHECK=off
+  const MeshMeasure coarse = trial_mesh(dim, diag / 20, diag / 20);
+  double measure = coarse.measure;
+  std::string measured = "from a coarse mesh";
+  if (!(coarse.count > 0 && measure > 0)) {
+    // the model's bounding box (in 2D, of the two largest extents)
+    double e[3] = {ext[0], ext[1], ext[2]};
+    std::sort(e, e + 3);
+    measure = dim == 2 ? e[2] * e[1] : e[2] * e[1] * e[0];
+    measured = "of the bounding box";
+  }
+  const std::string unit = dim == 2 ? " m^2" : " m^3";
+  const std::string what = (dim == 2 ? "area " : "volume ") + fmt(measure) + unit + " " + measured;
+  if (element_size > 0)  // at least this many: the file's own sizes can only be smaller
+    check_fits_in_memory(estimate_gmsh_elements(dim, measure, element_size), dim,
+                         "mesh.element_size = " + fmt(element_size) + " m for " + path + " (" + what + ")",
+                         element_size);
+  const double floor = diag * 1e-5;
+  const MeshMeasure lines = trial_mesh(1, floor, element_size > 0 ? std::max(element_size, floor) : 1e22);
+  if (lines.count == 0) return;
+  const double mean = lines.measure / static_cast<double>(lines.count);
+  if (element_size > 0 && mean >= element_size) return;  // checked above
+  const bool floored = mean <= 1.01 * floor;             // the file's sizes may be smaller still
+  check_fits_in_memory(estimate_gmsh_elements(dim, measure, mean), dim,
+                       "the element sizes set in " + path + " (mean segment " + (floored ? "<= " : "") +
+                           fmt(mean) + " m along its curves; " + what + ")");
+}
+
+// Gmsh does not always honour a size (4.8 counts a curve's segments in an int: above 2^31 the
+// curve gets one segment); a mesh whose mean edge is over twice the asked size is refused.
+void check_size_honoured(const HostMesh& m, const std::string& source, double h) {
+  const int npe = m.dim + 1, ne = m.num_elems();
+  double sum = 0;
+  std::size_t n = 0;
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < npe; ++a)
+      for (int b = a + 1; b < npe; ++b) {
+        const int p = m.elems[static_cast<std::size_t>(e) * npe + a];
+        const int q = m.elems[static_cast<std::size_t>(e) * npe + b];
+        double d2 = 0;
+        for (int k = 0; k < m.dim; ++k) {
+          const double d =
+              m.X[static_cast<std::size_t>(p) * m.dim + k] - m.X[static_cast<std::size_t>(q) * m.dim + k];
+          d2 += d * d;
+        }
+        sum += std::sqrt(d2);
+        ++n;
+      }
+  const double mean = n ? sum / static_cast<double>(n) : 0.0;
+  if (mean > 2 * h)
+    throw InputError(source + ": Gmsh did not honour mesh.element_size = " + fmt(h) + " m: its mesh has " +
+                     std::to_string(ne) + " elements with a mean edge of " + fmt(mean) +
+                     " m; give a larger mesh.element_size (Gmsh gives a curve one segment when it "
+                     "would need more than 2^31)");
+}
+
 }  // namespace
 
 HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
@@ -117,12 +546,9 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
   {
     std::error_code ec;
     if (path.empty()) throw InputError("mesh file name is empty");
-    if (!std::filesystem::exists(path, ec))
-      throw InputError(path + ": mesh file not found");
-    if (std::filesystem::is_directory(path, ec))
-      throw InputError(path + ": is a directory, not a mesh file");
-    if (!std::filesystem::is_regular_file(path, ec))
-      throw InputError(path + ": is not a regular file");
+    if (!std::filesystem::exists(path, ec)) throw InputError(path + ": mesh file not found");
+    if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory, not a mesh file");
+    if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": is not a regular file");
     std::ifstream probe(path, std::ios::binary);
     if (!probe) throw InputError(path + ": mesh file cannot be opened for reading");
   }
@@ -137,9 +563,7 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
                      (ext.empty() ? std::string("(no extension)") : "'" + ext + "'") +
                      " (fdem reads Gmsh .msh files, format 2.2 or 4.1, and .geo files)");
   if (!geo) check_msh_structure(path);
-  Extracted ex;
-  {
-    GmshSession session;
+  Extracted ex = run_gmsh_isolated(path, geo ? "mesh the geometry" : "read the file", [&] {
     gmsh_call(path, "read the file", [&] {
       gmsh::option::setNumber("General.AbortOnError", 0);
       gmsh::open(path);
@@ -148,6 +572,7 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
     std::string err = GmshSession::first_error();
     if (!err.empty()) throw InputError(path + ": Gmsh could not read the file: " + err);
     if (geo) {
+      refuse_oversized_geo(path, dim, element_size);
       if (element_size > 0) {  // an upper bound on the element size, over the file's own sizes
         gmsh::option::setNumber("Mesh.CharacteristicLengthMin", 0.0);
         gmsh::option::setNumber("Mesh.CharacteristicLengthMax", element_size);
@@ -156,8 +581,9 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
       err = GmshSession::first_error();
       if (!err.empty()) throw InputError(path + ": Gmsh could not mesh the geometry: " + err);
     }
-    ex = gmsh_call(path, "extract the mesh", [&] { return extract_model(dim, path); });
-  }
+    return gmsh_call(path, "extract the mesh", [&] { return extract_model(dim, path); });
+  });
+  if (geo && element_size > 0) check_size_honoured(ex.mesh, path, element_size);
   check_elements_impl(ex.mesh, path, &ex.elem_tags);
   return std::move(ex.mesh);
 }
@@ -165,8 +591,7 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
 namespace {
 
 void check_generator_args(const std::string& who, double R, double h) {
-  if (!(R > 0) || !std::isfinite(R))
-    throw InputError(who + ": radius must be positive (got " + fmt(R) + ")");
+  if (!(R > 0) || !std::isfinite(R)) throw InputError(who + ": radius must be positive (got " + fmt(R) + ")");
   if (!(h > 0) || !std::isfinite(h))
     throw InputError(who + ": element_size must be positive (got " + fmt(h) + ")");
   if (h > R) throw InputError(who + ": element_size " + fmt(h) + " is larger than the radius " + fmt(R));
@@ -196,12 +621,12 @@ HostMesh finish_generated(Extracted&& ex, const std::string& who) {
 HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region) {
   const std::string who = "disc generator";
   check_generator_args(who, R, h);
-  if (R / h > 5000) throw InputError(who + ": radius / element_size is too large");
+  if (R / h > 5000)
+    throw InputError(who + ": radius / element_size = " + fmt(R / h) +
+                     " is above the limit 5000: give mesh.element_size >= " + fmt(R / 5000));
   const std::string rname = region.empty() ? std::string("body") : region;
-  Extracted ex;
-  {
-    GmshSession session;
-    ex = gmsh_call(who, "mesh the disc", [&] {
+  Extracted ex = run_gmsh_isolated(who, "mesh the disc", [&] {
+    return gmsh_call(who, "mesh the disc", [&] {
       gmsh::model::add("disc");
       const int s = gmsh::model::occ::addDisk(cx, cy, 0.0, R, R);
       gmsh::model::occ::synchronize();
@@ -217,20 +642,20 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       gmsh::model::mesh::generate(2);
       return extract_model(2, who);
     });
-  }
+  });
+  check_size_honoured(ex.mesh, who, h);
   return finish_generated(std::move(ex), who);
 }
 
-HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
-                         const std::string& region) {
+HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h, const std::string& region) {
   const std::string who = "sphere generator";
   check_generator_args(who, R, h);
-  if (R / h > 200) throw InputError(who + ": radius / element_size is too large");
+  if (R / h > 200)
+    throw InputError(who + ": radius / element_size = " + fmt(R / h) +
+                     " is above the limit 200: give mesh.element_size >= " + fmt(R / 200));
   const std::string rname = region.empty() ? std::string("body") : region;
-  Extracted ex;
-  {
-    GmshSession session;
-    ex = gmsh_call(who, "mesh the sphere", [&] {
+  Extracted ex = run_gmsh_isolated(who, "mesh the sphere", [&] {
+    return gmsh_call(who, "mesh the sphere", [&] {
       gmsh::model::add("sphere");
       const int v = gmsh::model::occ::addSphere(centre[0], centre[1], centre[2], R);
       gmsh::model::occ::synchronize();
@@ -246,7 +671,8 @@ HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h
       gmsh::model::mesh::generate(3);
       return extract_model(3, who);
     });
-  }
+  });
+  check_size_honoured(ex.mesh, who, h);
   return finish_generated(std::move(ex), who);
 }
 

@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "common/error.hpp"
+#include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
 
 namespace fdem {
@@ -317,7 +318,8 @@ std::vector<int> boundary_faces(const HostMesh& mesh) {
 
 namespace {
 
-int cells_for(const std::string& kind, const char* axis, int given, double length, double h) {
+// Cells along one axis (a double: the memory check comes before the per-axis limit of to_cells).
+double cells_for(const std::string& kind, const char* axis, int given, double length, double h) {
   if (given > 0) return given;
   if (given < 0)
     throw InputError("mesh '" + kind + "': cells along " + axis + " must be positive (got " +
@@ -326,9 +328,27 @@ int cells_for(const std::string& kind, const char* axis, int given, double lengt
     throw InputError("mesh '" + kind + "': give either cells or a positive element_size");
   if (!(length > 0))
     throw InputError("mesh '" + kind + "': size along " + axis + " must be positive");
-  const double n = std::ceil(length / h - 1e-9);
-  if (n > 1e7) throw InputError("mesh '" + kind + "': too many cells along " + axis);
+  return std::max(1.0, std::ceil(length / h - 1e-9));
+}
+
+int to_cells(const std::string& kind, const char* axis, double n, double length, double h) {
+  if (!(n <= 1e7) && !(h > 0))
+    throw InputError("mesh.cells along " + std::string(axis) + " = " + fmt(n) + " for generator '" + kind +
+                     "' is above the limit of 1e+07 cells per direction");
+  if (!(n <= 1e7))
+    throw InputError(
+        "mesh.element_size = " + fmt(h) + " m makes " + fmt(n) + " cells along " + axis + " (size " +
+        fmt(length) + " m) for generator '" + kind +
+        "'; the limit is 1e+07 cells per direction: give mesh.element_size >= " + fmt(length / 1e7));
   return std::max(1, static_cast<int>(n));
+}
+
+// What asked for a block generator's cells, for the memory check's message.
+std::string block_request(const MeshSpec& spec, const double* n, int dim) {
+  std::string cells = fmt(n[0]);
+  for (int k = 1; k < dim; ++k) cells += " x " + fmt(n[k]);
+  if (spec.cells[0] > 0) return "mesh.cells = " + cells;
+  return "mesh.element_size = " + fmt(spec.element_size) + " m (" + cells + " cells)";
 }
 
 }  // namespace
@@ -348,24 +368,43 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
   }
   if (spec.kind == "rectangle") {
     need_dim(2);
-    const int nx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
-    const int ny = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
+    const double cx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
+    const double cy = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
+    const double n[2] = {cx, cy};
+    check_fits_in_memory(4.0 * cx * cy, 2, block_request(spec, n, 2),
+                         spec.cells[0] > 0 ? 0.0 : spec.element_size);
+    const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
+    const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
     return generate_crossed_rectangle(spec.origin[0], spec.origin[1], spec.size[0], spec.size[1],
                                       nx, ny, region);
   }
   if (spec.kind == "box") {
     need_dim(3);
-    const int nx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
-    const int ny = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
-    const int nz = cells_for(spec.kind, "z", spec.cells[2], spec.size[2], spec.element_size);
+    const double cx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
+    const double cy = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
+    const double cz = cells_for(spec.kind, "z", spec.cells[2], spec.size[2], spec.element_size);
+    const double n[3] = {cx, cy, cz};
+    check_fits_in_memory(6.0 * cx * cy * cz, 3, block_request(spec, n, 3),
+                         spec.cells[0] > 0 ? 0.0 : spec.element_size);
+    const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
+    const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
+    const int nz = to_cells(spec.kind, "z", cz, spec.size[2], spec.element_size);
     return generate_box(spec.origin, spec.size, nx, ny, nz, region);
   }
   if (spec.kind == "disc") {
     need_dim(2);
+    const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
+    if (R > 0 && h > 0 && h <= R)
+      check_fits_in_memory(estimate_gmsh_elements(2, pi * R * R, h), 2,
+                           "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m)", h);
     return generate_disc(spec.origin[0], spec.origin[1], spec.radius, spec.element_size, region);
   }
   if (spec.kind == "sphere") {
     need_dim(3);
+    const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
+    if (R > 0 && h > 0 && h <= R)
+      check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h), 3,
+                           "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h);
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +

@@ -293,6 +293,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   const TimeStep ts = decide_stable_step(sc);
   stable = ts.stable;
   dt = ts.dt;
+  check_step_count(c.file, dt, c.end_time, c.max_steps, stable);
 
   prm_.alpha = c.local_damping;
   prm_.cmass = c.mass_damping;

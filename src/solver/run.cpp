@@ -7,6 +7,7 @@
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
+#include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
@@ -29,6 +30,8 @@ HostMesh prepare_mesh(const Case& c) {
     for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
     insert_interfaces(mesh, frac);
   }
+  // the exact count (a .msh file's is known only now), before the model is allocated
+  check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
   return mesh;
 }
 
@@ -77,7 +80,7 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   Case c = load_case(case_path, opt.overrides);
-  if (opt.checkpoint_every >= 0 && !std::isfinite(opt.checkpoint_every))
+  if (!std::isfinite(opt.checkpoint_every))  // NaN too
     throw InputError("--checkpoint-every must be a finite time in seconds");
   StateArrays restart;
   CheckpointHeader header;
@@ -111,6 +114,10 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
+  const MemoryBudget mem = available_memory();
+  report["memory"] = {{"estimated_bytes", mesh.num_elems() * bytes_per_element(c.dim)},
+                      {"available_bytes", mem.bytes},
+                      {"available_from", mem.source}};
   auto add_dt = [&](const auto& sim) {
     report["time_step"] = stable_report(sim);
     report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);  // at the starting step

@@ -27,6 +27,8 @@ RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out,
       sim_(c, mesh),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
+  schedule_.check_checkpoint_interval(
+      sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   if (restart) sim_.load_state(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
   if (restart) {

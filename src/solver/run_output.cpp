@@ -35,6 +35,17 @@ bool OutputSchedule::take_checkpoint(double t) {
   return true;
 }
 
+void OutputSchedule::check_checkpoint_interval(double dt, const std::string& source,
+                                               const std::string& file) const {
+  if (ckpt_dt_ == 0 || (std::isfinite(ckpt_dt_) && ckpt_dt_ >= dt)) return;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "%s = %.4g s is not 0 (no checkpoints) or a finite time of at least one step "
+                "(dt = %.4g s)",
+                source.c_str(), ckpt_dt_, dt);
+  throw InputError(file + ": " + buf);
+}
+
 void OutputSchedule::save(RunState& s) const {
   s.next_history = next_hist_;
   s.next_snapshot = next_snap_;

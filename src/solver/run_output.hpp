@@ -32,6 +32,9 @@ class OutputSchedule {
   bool take_snapshot(double t);
   bool take_checkpoint(double t);
   double checkpoint_every() const { return ckpt_dt_; }
+  // InputError unless the checkpoint interval is 0 (none) or finite and at least one step dt
+  // (shorter, the schedule would never catch up). `source`: the option or key that set it.
+  void check_checkpoint_interval(double dt, const std::string& source, const std::string& file) const;
 
   void save(RunState& s) const;
   // t: the time of the restart point (the next checkpoint after it when the interval changed)

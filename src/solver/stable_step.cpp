@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+
+#include "common/error.hpp"
 
 namespace fdem {
 
@@ -37,6 +40,30 @@ TimeStep decide_stable_step(const StepContributions& c, bool contact_now, double
   s.contact_pending = false;
   out.stable = s;
   return out;
+}
+
+namespace {
+std::string num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+}  // namespace
+
+void check_step_count(const std::string& file, double dt, double end_time, long max_steps,
+                      const StableStep& stable) {
+  const std::string crit = "the critical step is " + num(stable.critical) + " s (bulk " + num(stable.bulk) +
+                           " s, springs " + num(stable.springs) + " s)";
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InputError(file + ": the time step dt = " + num(dt) + " s is not positive and finite; " + crit +
+                     " (check materials.*.density and E, the interface stiffnesses and time.dt)");
+  const double to_end = std::ceil(end_time / dt);
+  const double steps = max_steps > 0 ? std::min(to_end, static_cast<double>(max_steps)) : to_end;
+  if (!(steps <= kMaxRunSteps))
+    throw InputError(file + ": time.end_time / dt = " + num(end_time) + " s / " + num(dt) +
+                     " s = " + num(to_end) + " steps, above the limit of " + num(kMaxRunSteps) +
+                     " steps (a run that long cannot finish): give time.end_time <= " +
+                     num(kMaxRunSteps * dt) + " s, a larger time.dt or time.max_steps; " + crit);
 }
 
 }  // namespace fdem

@@ -3,6 +3,7 @@
 // fracture"): every contribution to it, and the one function that decides the estimates and the
 // step from them.
 #include <limits>
+#include <string>
 
 namespace fdem {
 
@@ -49,5 +50,16 @@ struct TimeStep {
 // present step dt_now: the same fraction of the critical step with contact as before; a case's
 // time.dt stays the limit.
 TimeStep decide_stable_step(const StepContributions& c, bool contact_now = false, double dt_now = 0);
+
+// Most steps a run may take: 1e12. The smallest test case (the 40-element bar of
+// tests/data/cases/bar.json) takes about 45 microseconds a step on one core (docs/developing.md,
+// "Refusals"): 1e12 steps would take it about 1.4 years, and any real mesh longer.
+inline constexpr double kMaxRunSteps = 1e12;
+
+// Refuses (InputError naming `file` and the numbers) a time step dt that is not positive and
+// finite, and a run of more than kMaxRunSteps steps: ceil(end_time / dt), or max_steps if that is
+// set (> 0) and smaller. `stable` gives the critical step for the message.
+void check_step_count(const std::string& file, double dt, double end_time, long max_steps,
+                      const StableStep& stable);
 
 }  // namespace fdem
