@@ -265,6 +265,22 @@ TEST(OutDir, NewRunRemovesTheResultsOfAnEarlierRunOnly) {
   clean({out});
 }
 
+// A new run refused before its first step (a mesh that would not fit in memory) leaves the results of
+// the earlier run in the folder as they were: nothing is removed before the mesh is there.
+TEST(OutDir, RefusedRunKeepsTheResultsOfAnEarlierRun) {
+  const std::string out = tmpdir("refused");
+  ASSERT_EQ(sh(fdem_run(kBar + " --out " + out + " --set time.end_time=1e-4") + " > " + out + ".log 2>&1"), 0)
+      << slurp(out + ".log");
+  const std::string history = slurp(out + "/history.csv"), summary = slurp(out + "/summary.json");
+  // a memory budget of 1 kB: the mesh estimate is refused (before meshing)
+  EXPECT_EQ(sh("FDEM_MEMORY_LIMIT_GB=1e-6 " + fdem_run(kBar + " --out " + out) + " > " + out + ".log 2>&1"), 2)
+      << slurp(out + ".log");
+  EXPECT_NE(slurp(out + ".log").find("GiB"), std::string::npos) << slurp(out + ".log");
+  EXPECT_EQ(slurp(out + "/history.csv"), history);
+  EXPECT_EQ(slurp(out + "/summary.json"), summary);
+  clean({out});
+}
+
 // ---- a full disk ----
 
 // Snapshots, a checkpoint, then history.csv cannot be written (file size limit): exit 2, not a

@@ -89,12 +89,8 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   ensure_output_dir(out);
   const OutputLock lock(out);  // the folder is this run's until it returns
   refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
-  // A new run's folder holds only its results; a restart continues those there. (A restart
-  // checks the case against the checkpoint before it touches the folder's case.json.)
-  if (opt.restart.empty()) {
-    remove_old_outputs(out);
-    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
-  }
+  // The mesh (and a restart's match with it) before the folder is touched: a case whose mesh
+  // cannot be made or would not fit leaves the results of an earlier run where they are.
   const HostMesh mesh = prepare_mesh(c);
   const RunIdentity id{case_hash(c), mesh_hash(mesh)};
   const StateArrays* r = nullptr;
@@ -102,8 +98,9 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
     check_restart_matches(opt.restart, header, c, mesh, id);
     r = &restart;
   }
-  // case.json (a new run wrote it as read above, so that a mesh error leaves it) with the derived
-  // values the run uses
+  // A new run's folder holds only its results; a restart continues those there.
+  if (opt.restart.empty()) remove_old_outputs(out);
+  // case.json: the case as run, with the derived values the run uses
   resolve_defaults(c, mesh);
   write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
   return c.dim == 2 ? run_dim<2>(c, mesh, out, opt, id, r) : run_dim<3>(c, mesh, out, opt, id, r);
