@@ -8,15 +8,17 @@ namespace fdem {
 
 nlohmann::json mesh_report(const HostMesh& mesh) {
   const auto q = mesh_quality(mesh);
-  return {{"nodes", mesh.num_nodes()},
-          {"elements", mesh.num_elems()},
-          {"interfaces", mesh.num_ifaces()},
-          {"regions", mesh.region_names},
-          {"quality",
-           {{"min_angle_deg", q.min_angle_deg},
-            {"max_aspect", q.max_aspect},
-            {"min_altitude_m", q.min_size},
-            {"mean_edge_m", q.mean_size}}}};
+  nlohmann::json j = {{"nodes", mesh.num_nodes()},
+                      {"elements", mesh.num_elems()},
+                      {"interfaces", mesh.num_ifaces()},
+                      {"regions", mesh.region_names},
+                      {"quality",
+                       {{"min_angle_deg", q.min_angle_deg},
+                        {"max_aspect", q.max_aspect},
+                        {"min_altitude_m", q.min_size},
+                        {"mean_edge_m", q.mean_size}}}};
+  if (!mesh.warnings.empty()) j["warnings"] = mesh.warnings;
+  return j;
 }
 
 template <int D>
