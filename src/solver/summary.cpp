@@ -80,6 +80,14 @@ nlohmann::json results_report(const Case& c, const Simulation<D>& sim, const His
     results["platens"][sim.platen_names()[p]] = {{"peak_load_N", peak[p]},
                                                  {"displacement_at_peak_m", history.peak_displacement()[p]}};
   }
+  if (!c.stop_platen.empty()) {  // the load sampling of the stop rule (solver/history_table.hpp)
+    results["stop_rule"] = {{"platen", c.stop_platen},
+                            {"drop_fraction", c.stop_drop_fraction},
+                            {"window_s", history.load_window()},
+                            {"sample_interval_s", history.load_sample_interval()},
+                            {"window_averaged_peak_load_N", history.smoothed_peak()}};
+    if (history.stop_met_at() >= 0) results["stop_rule"]["met_at_s"] = history.stop_met_at();
+  }
   if (np > 0) {
     results["peak_load_N"] = peak[0];
     if (D == 2 && c.mesh.kind == "disc" && np >= 2) {  // not for a disc striking one plate
@@ -131,6 +139,11 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
       r.loop_wall_seconds > 0 ? sim.step_count * double(sim.m.ne) / r.loop_wall_seconds : 0;
   summary["phases"] = phases_report(sim.phase_times());
   summary["energy"] = energy_report(last, history.max_relative_balance_error());
+  summary["energy"]["warning_threshold"] = HistoryTable<D>::kBalanceWarning;
+  if (history.balance_warned_at() >= 0)
+    summary["energy"]["warning"] = {{"time_s", history.balance_warned_at()},
+                                    {"step", history.balance_warned_step()},
+                                    {"relative_balance_error", history.balance_warned_error()}};
   summary["interfaces_damaged"] = last.damaged;
   summary["interfaces_failed"] = last.failed;
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
