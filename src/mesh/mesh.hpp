@@ -25,6 +25,8 @@ struct HostMesh {
   std::vector<int> ifaces;
   std::vector<int> iface_elems;          // num_ifaces * 2: (element on side A, element on side B)
   std::vector<int> node_origin;          // per node: its id before insertion (identity before)
+  // Warnings of the checks before the run (check_bodies), for the check report and summary.json.
+  std::vector<std::string> warnings;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }
@@ -75,6 +77,22 @@ HostMesh build_mesh(const MeshSpec& spec, int dim);
 // Throws InputError naming the first element whose signed area/volume is <= a tiny fraction of
 // the mean (zero or inverted), with its index, region and centroid. `source` names the file.
 void check_elements(const HostMesh& mesh, const std::string& source);
+
+// Bodies (elements joined through shared nodes) before interface insertion, src/mesh/mesh_bodies.cpp.
+// Duplicate nodes: nodes used by elements that lie within `tolerance` (1e-6 of the mean edge) of
+// each other. Within one body they split it at a point (a mesh error: InputError); between two
+// bodies they are a warning (the bodies touch but are not joined). Overlap: nodes inside an element
+// of another body deeper than the tolerance (depth: distance to that element's nearest face);
+// deeper than 1e-3 of the mean edge an InputError, else a warning. `source` names the mesh.
+struct BodyCheck {
+  int bodies = 0;
+  double tolerance = 0;  // m
+  long duplicate_nodes = 0, split_pairs = 0, touching_pairs = 0;
+  long overlapping_nodes = 0;
+  double overlap_depth = 0;  // m, the deepest (a lower bound: distance to the nearest face of the element)
+  std::vector<std::string> warnings;
+};
+BodyCheck check_bodies(const HostMesh& mesh, const std::string& source);
 
 // Renumber elements along a space-filling curve and nodes in order of first use, so that
 // neighbours sit near each other in memory. Call before insert_interfaces.

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 #include "common/error.hpp"
 
@@ -21,6 +23,38 @@ HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulat
   for (int p = 0; p < np; ++p)
     if (sim.platen_names()[p] == c.stop_platen) stop_platen_ = p;
   add_columns(sim, mesh);
+  set_load_window(c, mesh);
+}
+
+// The load window: the P-wave transit time across the body along the stop platen's normal (the
+// largest extent along any platen's normal without a stop rule), in the slowest material of the
+// case, at most end_time / 10; 32 load samples per window.
+template <int D>
+void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh) {
+  double c_min = std::numeric_limits<double>::infinity();
+  for (const auto& rm : c.region_material) {
+    if (rm.second < 0 || rm.second >= static_cast<int>(c.materials.size())) continue;
+    const BulkMaterial& m = c.materials[rm.second];
+    const double nu = m.nu;
+    const double modulus =
+        (D == 2 && c.plane_stress) ? m.E / (1 - nu * nu) : m.E * (1 - nu) / ((1 + nu) * (1 - 2 * nu));
+    if (m.density > 0 && modulus > 0) c_min = std::min(c_min, std::sqrt(modulus / m.density));
+  }
+  double extent = 0;
+  for (const auto& P : c.platens) {
+    if (stop_platen_ >= 0 && P.name != c.stop_platen) continue;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int i = 0; i < mesh.num_nodes(); ++i) {
+      double s = 0;
+      for (int k = 0; k < D; ++k) s += mesh.X[static_cast<size_t>(i) * D + k] * P.normal[k];
+      lo = std::min(lo, s);
+      hi = std::max(hi, s);
+    }
+    if (hi > lo) extent = std::max(extent, hi - lo);
+  }
+  window_ = c.end_time / 10;
+  if (extent > 0 && std::isfinite(c_min)) window_ = std::min(window_, extent / c_min);
+  sample_dt_ = window_ / 32;
 }
 
 template <int D>
@@ -62,7 +96,7 @@ void HistoryTable<D>::open(const std::string& out, bool restarted) {
 }
 
 template <int D>
-std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim, bool& stop) {
+std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim) {
   std::vector<double> row = {last_.time, static_cast<double>(last_.step)};
   for (int p = 0; p < sim.m.platens.count; ++p) {
     const auto F = sim.platen_force(p);
@@ -72,11 +106,6 @@ std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim, bool& st
     row.push_back(disp);
     for (int k = 0; k < D; ++k) row.push_back(F[k]);
     row.push_back(load);
-    if (load > peak_[p]) {
-      peak_[p] = load;
-      peak_disp_[p] = disp;
-    }
-    if (p == stop_platen_ && peak_[p] > 0 && load < (1 - c_.stop_drop_fraction) * peak_[p]) stop = true;
   }
   for (const auto& r : sim.reactions())
     for (int k = 0; k < D; ++k) row.push_back(r[k]);
@@ -96,15 +125,62 @@ std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim, bool& st
 }
 
 template <int D>
-bool HistoryTable<D>::write_row(const Simulation<D>& sim) {
+void HistoryTable<D>::write_row(const Simulation<D>& sim) {
   last_ = sim.energies();
-  bool stop = false;
-  const std::vector<double> row = make_row(sim, stop);
+  const std::vector<double> row = make_row(sim);
   file_->row(row);
   rows_.insert(rows_.end(), row.begin(), row.end());
-  if (last_.scale > 0)
-    max_rel_error_ = std::max(max_rel_error_, std::fabs(last_.balance_error) / last_.scale);
+  check_balance(last_);
+}
+
+template <int D>
+bool HistoryTable<D>::sample_loads(const Simulation<D>& sim, double t0) {
+  if (!(sample_dt_ > 0) || t0 < next_sample_ * (1 - 1e-12)) return false;
+  // the next sample: the first step at or after the next multiple of the interval
+  next_sample_ = sample_dt_ * (std::floor(t0 / sample_dt_ * (1 + 1e-12)) + 1);
+  bool stop = false;
+  for (int p = 0; p < sim.m.platens.count; ++p) {
+    const auto F = sim.platen_force(p);
+    const auto& P = sim.m.platens.p[p];
+    const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
+    if (load > peak_[p]) {
+      peak_[p] = load;
+      peak_disp_[p] = sim.platen_displacement(p, t0);
+    }
+    if (p != stop_platen_) continue;
+    if (first_sample_ < 0) first_sample_ = t0;
+    recent_.emplace_back(t0, load);
+    while (recent_.front().first <= t0 - window_ * (1 - 1e-12)) recent_.pop_front();
+    if (t0 - first_sample_ < window_ * (1 - 1e-12)) continue;  // the first window is not full yet
+    double sum = 0;
+    for (const auto& s : recent_) sum += s.second;
+    const double mean = sum / static_cast<double>(recent_.size());
+    smooth_peak_ = std::max(smooth_peak_, mean);
+    if (smooth_peak_ > 0 && mean < (1 - c_.stop_drop_fraction) * smooth_peak_) {
+      stop = true;
+      stop_at_ = t0;
+    }
+  }
   return stop;
+}
+
+template <int D>
+void HistoryTable<D>::check_balance(const Energies& e) {
+  // (the first steps are left out, as by Simulation::check_stability: the energy scale is then
+  // the round-off floor and the start-up of the work accounting is not a balance error)
+  if (!(e.scale > 0) || e.step < 10) return;
+  const double rel = std::fabs(e.balance_error) / e.scale;
+  max_rel_error_ = std::max(max_rel_error_, rel);
+  if (warn_time_ >= 0 || !(rel > kBalanceWarning)) return;
+  warn_time_ = e.time;
+  warn_step_ = e.step;
+  warn_error_ = rel;
+  std::fprintf(stderr,
+               "fdem: warning: energy balance error %.3g %% of the energy scale (%.3e J) at step %ld, "
+               "t = %.4e s (warning above %.0f %%; the run stops at 50 %%). Energy appears or vanishes "
+               "without work: check the mesh (duplicate nodes, overlapping bodies), the time step and "
+               "the contact and platen stiffnesses.\n",
+               100 * rel, e.scale, e.step, e.time, 100 * kBalanceWarning);
 }
 
 template <int D>
@@ -122,6 +198,9 @@ void HistoryTable<D>::save(RunState& s) const {
   s.peak_displacement = peak_disp_;
   s.max_relative_balance_error = max_rel_error_;
   s.last_row_energies = energies_to_vector(last_);
+  s.load_samples = {next_sample_, first_sample_, smooth_peak_, stop_at_};
+  for (const auto& r : recent_) s.load_samples.insert(s.load_samples.end(), {r.first, r.second});
+  s.balance_warning = {warn_time_, static_cast<double>(warn_step_), warn_error_};
 }
 
 template <int D>
@@ -135,6 +214,27 @@ void HistoryTable<D>::restore(const RunState& s, const std::string& file) {
   peak_disp_ = s.peak_displacement;
   max_rel_error_ = s.max_relative_balance_error;
   last_ = energies_from_vector(s.last_row_energies);
+  // (checkpoints written before the load sampling and the balance warning lack them: the
+  // sampling then starts afresh and the warning is taken as given when the error is above it)
+  const std::vector<double>& ls = s.load_samples;
+  if (ls.size() >= 4 && ls.size() % 2 == 0) {
+    next_sample_ = ls[0];
+    first_sample_ = ls[1];
+    smooth_peak_ = ls[2];
+    stop_at_ = ls[3];
+    recent_.clear();
+    for (size_t k = 4; k < ls.size(); k += 2) recent_.emplace_back(ls[k], ls[k + 1]);
+  } else {
+    next_sample_ = sample_dt_ * (std::floor(last_.time / sample_dt_) + 1);
+  }
+  if (s.balance_warning.size() == 3) {
+    warn_time_ = s.balance_warning[0];
+    warn_step_ = static_cast<long>(s.balance_warning[1]);
+    warn_error_ = s.balance_warning[2];
+  } else if (max_rel_error_ > kBalanceWarning) {
+    warn_time_ = 0;
+    warn_error_ = max_rel_error_;
+  }
 }
 
 template class HistoryTable<2>;

@@ -24,6 +24,8 @@ HostMesh prepare_mesh(const Case& c) {
   const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
   check_elements(mesh, source);
   check_case_against_mesh(c, mesh);
+  mesh.warnings = check_bodies(mesh, source).warnings;  // duplicate nodes, overlapping bodies
+  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
   reorder_for_locality(mesh);
   if (!c.fracturable_regions.empty()) {
     std::vector<bool> frac(mesh.region_names.size(), false);

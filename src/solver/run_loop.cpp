@@ -95,9 +95,11 @@ nlohmann::json RunLoop<D>::run() {
       break;
     }
     const bool row = schedule_.history_due(sim_.t);  // sampled at the start of the step
+    const double t0 = sim_.t;
     step(row, row || schedule_.check_due(sim_.step_count));
     schedule_.stepped(row);
-    if (row && history_row()) {
+    if (row) history_row();
+    if (history_->sample_loads(sim_, t0)) {  // on its own cadence, not the rows'
       stop_reason = "load_drop";
       break;
     }
@@ -141,7 +143,10 @@ void RunLoop<D>::step(bool row, bool check) {
   if (c_.damping_change_time >= 0 && sim_.t >= c_.damping_change_time * (1 - 1e-12))
     sim_.set_damping(c_.damping_change_local, c_.damping_change_mass);
   sim_.step(check);
-  if (check) sim_.check_stability();
+  if (check) {
+    sim_.check_stability();
+    history_->check_balance(sim_.energies());
+  }
   if (sim_.dt_changed_at() == sim_.step_count - 1) {
     char line[256];
     std::snprintf(line, sizeof line,
@@ -153,10 +158,9 @@ void RunLoop<D>::step(bool row, bool check) {
 }
 
 template <int D>
-bool RunLoop<D>::history_row() {
-  const bool stop = history_->write_row(sim_);
+void RunLoop<D>::history_row() {
+  history_->write_row(sim_);
   if (frag_) frag_->write_row(sim_, history_->last());
-  return stop;
 }
 
 // The run ended between rows: one more sampled step for a row at its end.

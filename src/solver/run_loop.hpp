@@ -35,7 +35,7 @@ class RunLoop {
   void restore(const StateArrays& r);
   void announce() const;
   void step(bool row, bool check);
-  bool history_row();  // true when the stop rule is met
+  void history_row();
   void final_row();
   void save_checkpoint();
   nlohmann::json interrupted();

@@ -52,8 +52,16 @@ struct Reader {
 
 }  // namespace
 
-void RunState::save(StateArrays& s) const { fields(*this, Writer{s}, -1); }
+void RunState::save(StateArrays& s) const {
+  fields(*this, Writer{s}, -1);
+  s.f64["run/load_samples"] = load_samples;
+  s.f64["run/balance_warning"] = balance_warning;
+}
 
-void RunState::load(const StateArrays& s, int platens) { fields(*this, Reader{s}, platens); }
+void RunState::load(const StateArrays& s, int platens) {
+  fields(*this, Reader{s}, platens);
+  if (s.has("run/load_samples")) load_samples = s.array("run/load_samples");
+  if (s.has("run/balance_warning")) balance_warning = s.array("run/balance_warning", 3);
+}
 
 }  // namespace fdem

@@ -29,6 +29,10 @@ struct RunState {
   std::vector<double> snapshot_times;
   double wall_seconds = 0, loop_wall_seconds = 0, checkpoint_seconds = 0;  // all processes so far
   long long checkpoints_written = 0;
+  // HistoryTable's load sampling (next sample, first sample, smoothed peak, stop time, then the
+  // window's (time, load) pairs) and balance warning (time, step, error); optional on load
+  // (empty when the checkpoint has none).
+  std::vector<double> load_samples, balance_warning;
 
   void save(StateArrays& s) const;
   // Reads every field; `platens`: the case's platen count (sizes of the peak arrays). Throws

@@ -10,15 +10,17 @@ namespace fdem {
 
 nlohmann::json mesh_report(const HostMesh& mesh) {
   const auto q = mesh_quality(mesh);
-  return {{"nodes", mesh.num_nodes()},
-          {"elements", mesh.num_elems()},
-          {"interfaces", mesh.num_ifaces()},
-          {"regions", mesh.region_names},
-          {"quality",
-           {{"min_angle_deg", q.min_angle_deg},
-            {"max_aspect", q.max_aspect},
-            {"min_altitude_m", q.min_size},
-            {"mean_edge_m", q.mean_size}}}};
+  nlohmann::json j = {{"nodes", mesh.num_nodes()},
+                      {"elements", mesh.num_elems()},
+                      {"interfaces", mesh.num_ifaces()},
+                      {"regions", mesh.region_names},
+                      {"quality",
+                       {{"min_angle_deg", q.min_angle_deg},
+                        {"max_aspect", q.max_aspect},
+                        {"min_altitude_m", q.min_size},
+                        {"mean_edge_m", q.mean_size}}}};
+  if (!mesh.warnings.empty()) j["warnings"] = mesh.warnings;
+  return j;
 }
 
 template <int D>
@@ -80,6 +82,14 @@ nlohmann::json results_report(const Case& c, const Simulation<D>& sim, const His
     results["platens"][sim.platen_names()[p]] = {{"peak_load_N", peak[p]},
                                                  {"displacement_at_peak_m", history.peak_displacement()[p]}};
   }
+  if (!c.stop_platen.empty()) {  // the load sampling of the stop rule (solver/history_table.hpp)
+    results["stop_rule"] = {{"platen", c.stop_platen},
+                            {"drop_fraction", c.stop_drop_fraction},
+                            {"window_s", history.load_window()},
+                            {"sample_interval_s", history.load_sample_interval()},
+                            {"window_averaged_peak_load_N", history.smoothed_peak()}};
+    if (history.stop_met_at() >= 0) results["stop_rule"]["met_at_s"] = history.stop_met_at();
+  }
   if (np > 0) {
     results["peak_load_N"] = peak[0];
     if (D == 2 && c.mesh.kind == "disc" && np >= 2) {  // not for a disc striking one plate
@@ -133,6 +143,11 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   summary["phases"] = phases_report(sim.phase_times());
   if (kernel_times::enabled()) summary["kernel_times"] = kernel_times::report();
   summary["energy"] = energy_report(last, history.max_relative_balance_error());
+  summary["energy"]["warning_threshold"] = HistoryTable<D>::kBalanceWarning;
+  if (history.balance_warned_at() >= 0)
+    summary["energy"]["warning"] = {{"time_s", history.balance_warned_at()},
+                                    {"step", history.balance_warned_step()},
+                                    {"relative_balance_error", history.balance_warned_error()}};
   summary["interfaces_damaged"] = last.damaged;
   summary["interfaces_failed"] = last.failed;
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
