@@ -24,6 +24,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 GROWTH_LIMIT = 1.3
+YARDSTICK_LIMIT = 1.6  # issue 19: the intact full step at most 1.6 times the yardstick (perf/yardstick.hpp)
 BANDWIDTH_TARGET = 0.30
 CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.05}  # cases/brazilian_disc/case.json
 
@@ -246,6 +247,47 @@ class Report:
         self.footer(fig, s["command"], s["threads"], s["backend"])
         p = self.save(fig, "perf_bandwidth.png")
         self.w(f"![achieved bandwidth per kernel on the largest meshes]({p})")
+        self.w()
+
+    def yardstick(self):
+        """The full step against the yardstick (perf/yardstick.hpp: a minimal fused step on the same
+        mesh, timed in the same rounds), per element-step: every size, and the largest meshes at each
+        thread count."""
+        entries = []
+        if self.step:
+            for r in self.step["runs"]:
+                entries.append((self.step.get("threads", 0), r))
+        for t in sorted(self.threads):
+            for r in self.threads[t]["runs"]:
+                entries.append((t, r))
+        entries = [(t, r) for t, r in entries if r.get("step_over_yardstick")]
+        if not entries:
+            return
+        self.w("## 2b. The full step against the yardstick")
+        self.w()
+        self.w("The yardstick (`perf/yardstick.hpp`) is the least physics that does the method's work: "
+               "small-strain simplices, a mode-I damage law with one history value per interface point "
+               "written only when it grows, local damping, the same duplicated scatter, chunks, mesh and "
+               "memory order. bench_step times it in the same rounds as the full step, so the ratio "
+               f"holds whatever the machine's load (target: at most {YARDSTICK_LIMIT} for the intact step "
+               "at 1e6 elements, issue 19).")
+        self.w()
+        rows = []
+        for dim in (2, 3):
+            for t, r in entries:
+                if r["dim"] != dim:
+                    continue
+                k = {x["name"]: x for x in r["kernels"]}
+                ratio = r["step_over_yardstick"]
+                big = r["elements"] >= 9e5
+                if big:
+                    self.checks.append((f"step/yardstick {dim}D, {t} thread(s)", ratio <= YARDSTICK_LIMIT,
+                                        f"{ratio:.2f} x"))
+                rows.append([f"{dim}D", fmt(r["elements"]), str(t), f"{k['step']['ns_per_element_step']:.1f}",
+                             f"{k['yardstick']['ns_per_element_step']:.1f}", f"{ratio:.2f}",
+                             f"{r.get('step_sampled_over_yardstick', 0):.2f}"])
+        self.w(table(["mesh", "elements", "threads", "step ns/element", "yardstick ns/element", "step / yardstick",
+                      "sampled step / yardstick"], rows))
         self.w()
 
     def growth_and_bandwidth(self):
@@ -636,6 +678,7 @@ class Report:
         body_start = len(self.lines)
         self.throughput()
         self.growth_and_bandwidth()
+        self.yardstick()
         self.thread_scaling()
         self.skips()
         self.contact()

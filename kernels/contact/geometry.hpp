@@ -110,16 +110,23 @@ KOKKOS_INLINE_FUNCTION void face_geometry_of(const double (&xf)[D][D], const G& 
   }
 }
 
-// face_project from the stored geometry of face f (same arithmetic).
+// The two halves of face_project_geo: the signed gap g along the face's unit normal n (and the
+// offset w of p from the face's first vertex), from the first 2 D values of the face's geometry
+// row; then the barycentric coordinates N of p's projection from w. The narrow phase takes the
+// second only for faces near enough to matter.
 template <int D, class G>
-KOKKOS_INLINE_FUNCTION double face_project_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
-                                               double (&N)[D]) {
-  double w[D], g = 0;
+KOKKOS_INLINE_FUNCTION double face_gap_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
+                                           double (&w)[D]) {
+  double g = 0;
   for (int k = 0; k < D; ++k) {
     n[k] = geo(f, D + k);
     w[k] = p[k] - geo(f, k);
     g += w[k] * n[k];
   }
+  return g;
+}
+template <int D, class G>
+KOKKOS_INLINE_FUNCTION void face_bary_geo(const G& geo, int f, const double (&w)[D], double (&N)[D]) {
   if constexpr (D == 2) {
     const double xi = (w[0] * geo(f, 4) + w[1] * geo(f, 5)) * geo(f, 6);
     N[0] = 1.0 - xi;
@@ -135,6 +142,15 @@ KOKKOS_INLINE_FUNCTION double face_project_geo(const G& geo, int f, const double
     N[2] = (d00 * d21 - d01 * d20) * id;
     N[0] = 1.0 - N[1] - N[2];
   }
+}
+
+// face_project from the stored geometry of face f (same arithmetic).
+template <int D, class G>
+KOKKOS_INLINE_FUNCTION double face_project_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
+                                               double (&N)[D]) {
+  double w[D];
+  const double g = face_gap_geo<D>(geo, f, p, n, w);
+  face_bary_geo<D>(geo, f, w, N);
   return g;
 }
 

@@ -293,9 +293,14 @@ struct ContactForcesFn {
     for (int j = b; j < e; ++j) {
       const int fc = P.face(j);
       const int own = S.fowner(fc);
-      double n[D], N[D];
-      const double g = face_project_geo<D>(S.fgeo, S.fslot(fc), xs, n, N);
+      double n[D], N[D], wv[D];  // normal, barycentric coordinates, offset from the face
+      const double g = face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);
       scr.g(j) = g;
+      const bool near = g > -L.dpen && g < L.dpen;
+      if (!near && !S.efree(own)) {  // most candidates: no weight, nothing more to compute
+        scr.phi(j) = 0.0;
+        continue;
+      }
       if (S.efree(own)) {  // a free element: contact through its nearest face, if inside
         if (own != last_e) {
           last_e = own;
@@ -309,10 +314,10 @@ struct ContactForcesFn {
         scr.phi(j) = -1.0;
         continue;
       }
+      face_bary_geo<D>(S.fgeo, S.fslot(fc), wv, N);
       double score = N[0];
       for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
-      const bool near = g > -L.dpen && g < L.dpen;
-      double phi = near ? contact_fade(score, L.tol) : 0.0;
+      double phi = contact_fade(score, L.tol);  // near
       if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
       scr.phi(j) = phi;
       for (int k = 0; k < D; ++k) scr.n(j, k) = n[k];
