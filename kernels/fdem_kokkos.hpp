@@ -41,6 +41,29 @@ struct SumN {
 #endif
 };
 
+// The labels of reductions and scans whose result stays in device memory (a View) end in this
+// mark; a reduction into a host value makes the host wait for the device (tests/test_gpu_ready.cpp
+// tells the two apart by it).
+inline constexpr char kDeviceResult[] = " [device]";
+
+// Every fence the code asks for (host code in src/) goes through here: counted, because Kokkos
+// 3.4.1 reports no fence of a host backend to its profiling hooks (tests/test_gpu_ready.cpp counts
+// them per step, and checks that src/ and kernels/ call Kokkos::fence nowhere else), and named
+// where Kokkos takes a name.
+inline long& fence_count() {
+  static long n = 0;
+  return n;
+}
+inline void fence(const char* why) {
+  ++fence_count();
+#if KOKKOS_VERSION >= 30600
+  Kokkos::fence(why);
+#else
+  (void)why;
+  Kokkos::fence();
+#endif
+}
+
 // Scatter of nodal forces: ScatterView duplicates per thread on host backends and uses atomics
 // on GPUs (Kokkos' per-backend defaults); `access()` is taken once per chunk of kScatterChunk items.
 constexpr int kScatterChunk = 256;

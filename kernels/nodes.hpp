@@ -128,6 +128,29 @@ NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
   return out;
 }
 
+// The update of an unsampled step (Sample = false) without a wait for the host: the sums are
+// reduced into device memory (`sums`) and the damping and velocity-BC works added to `work`
+// (0: damping, 1: velocity BCs) there, in step order (Simulation reads them on sampled steps).
+template <int D, bool Damp>
+void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm,
+                            const Kokkos::View<NodeSums>& sums, const Kokkos::View<double[2]>& work) {
+  const NodeUpdate<D, false, Damp> fn{m.x, m.X, m.v, m.f, m.fext, m.mass, m.node_bc, m.bcs, prm,
+                                      prm.t + 0.5 * prm.dt};
+  if (!(Damp || m.bcs.extent(0) > 0)) {
+    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+                         NodeUpdateNoSums<NodeUpdate<D, false, Damp>>{fn});
+    return;
+  }
+  Kokkos::parallel_reduce("fdem::nodes [device]", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, sums);
+  auto s = sums;
+  auto w = work;
+  Kokkos::parallel_for(
+      "fdem::nodes::work", Kokkos::RangePolicy<ExecSpace>(0, 1), KOKKOS_LAMBDA(const int) {
+        w(0) += s().damping;
+        w(1) += s().bc_work;
+      });
+}
+
 }  // namespace fdem
 
 namespace Kokkos {

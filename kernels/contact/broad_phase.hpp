@@ -217,7 +217,7 @@ void grid_bin(const CellGrid<D>& g, const SearchSet<D>& S) {
         Kokkos::atomic_add(&count(grid_cell<D>(geo, c, ijk)), 1);
       });
   Kokkos::parallel_scan(
-      "fdem::contact::grid_scan", Kokkos::RangePolicy<ExecSpace>(0, ncell + 1),
+      "fdem::contact::grid_scan [device]", Kokkos::RangePolicy<ExecSpace>(0, ncell + 1),
       KOKKOS_LAMBDA(const int c, int& upd, const bool final) {
         const int v = c < ncell ? count(c) : 0;
         if (final) offset(c) = upd;

@@ -60,7 +60,7 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
 
   m.contact_handover = true;
   m.handover_slip = law.dpen;
-  m.icontact_pending = Kokkos::View<int>("fdem::icontact_pending");
+  m.icontact_pending = Kokkos::View<int>(std::string(kContactSyncLabel) + "::icontact_pending");
   // Failed, parted interfaces are handed over every 25 steps (a failed interface keeps its
   // compression penalty until then): each handover refreshes the surfaces and rebuilds the
   // candidate lists (cost measured in docs/theory.md section 6b). On GPUs the check also costs a
@@ -167,6 +167,8 @@ void ContactSystem<D>::allocate_work() {
   grid_.offset = Kokkos::View<int*>("fdem::contact::cell_offset", cell_cap_ + 1);
   grid_.faces = Kokkos::View<int*>("fdem::contact::cell_faces", nf_);
   for (PairList<D>* p : {&cur_, &next_}) p->off = Kokkos::View<int*>("fdem::contact::pair_off", nn_ + 1);
+  pass_ = Kokkos::View<ContactSums>("fdem::contact::pass");
+  status_ = Kokkos::View<ContactStatus>(std::string(kContactSyncLabel) + "::status");
 }
 
 template <int D>
@@ -270,13 +272,15 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
     since_check_ = 0;
     int pending = 0;
     Kokkos::deep_copy(pending, m.icontact_pending);
+    ++syncs_;
     if (pending) check_failures(m);
   }
-  if (!may_meet_ || ns_ == 0 || na_ == 0) {
-    active_ = 0;
-    return;
+  if (!may_meet_ || ns_ == 0 || na_ == 0) return;
+  if (!need_build_ && until_recheck_ <= 0) recheck(dt);
+  if (need_build_) {
+    build(m);
+    until_recheck_ = 0;  // the speed of the first pass on the new lists sets the next re-check
   }
-  if (need_build_) build(m);
   face_geometry<D>(m.x, surf_, afaces_, na_);
   if (nfree_ > 0) element_planes<D>(m.x, surf_, ne_);
   // Frictionless contact skips the shear springs. On the first step without friction after steps
@@ -285,14 +289,40 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   const bool fric = law.mu != 0.0 || law.coh != 0.0;
   const bool full = !skip_frictionless || fric || friction_before_;
   friction_before_ = fric || !skip_frictionless;
-  const ContactSums r = full ? contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf)
-                             : contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf);
-  dissipated_ += r.dissipated;
-  active_ = static_cast<int>(r.active);
-  // Verlet test for the next step: the lists stay valid while no surface node has moved more than
-  // half the skin since the build; the displacement at the next step is bounded by this one plus
-  // a step at (twice) the largest speed.
-  need_build_ = std::sqrt(r.d2max) + 2.0 * std::sqrt(r.v2max) * dt > 0.5 * skin;
+  if (full) contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
+  else contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
+  contact_account(pass_, status_, 0.5 * skin);
+  --until_recheck_;
+}
+
+// Verlet test (see "Synchronisation" in contact_system.hpp): the lists stay valid while no surface
+// node has moved more than half the skin since the build; the displacement at the next step is
+// bounded by the last pass's plus a step at (twice) the largest speed, and K steps on by the last
+// pass's plus K such steps.
+template <int D>
+void ContactSystem<D>::recheck(double dt) {
+  constexpr int kMaxRecheck = 25;
+  until_recheck_ = kMaxRecheck;
+  const ContactStatus st = read_status();
+  ++syncs_;
+  const double d = std::sqrt(st.d2max), step = 2.0 * std::sqrt(st.v2max) * dt, half = 0.5 * skin;
+  need_build_ = d + step > half || st.stale > stale_seen_;
+  stale_seen_ = st.stale;
+  if (!need_build_ && step > 0)
+    until_recheck_ = static_cast<int>(std::min<double>(kMaxRecheck, std::floor((half - d) / step)));
+}
+
+template <int D>
+ContactStatus ContactSystem<D>::read_status() const {
+  ContactStatus h;
+  Kokkos::deep_copy(h, status_);
+  return h;
+}
+
+template <int D>
+int ContactSystem<D>::active_contacts() const {
+  if (!may_meet_ || ns_ == 0 || na_ == 0) return 0;
+  return static_cast<int>(read_status().active);
 }
 
 template <int D>
@@ -309,10 +339,10 @@ void ContactSystem<D>::state_fields(Self& self, F&& f) {
   f("contact/may_meet", self.may_meet_);
   f("contact/need_build", self.need_build_);
   f("contact/since_check", self.since_check_);
-  f("contact/active", self.active_);
   f("contact/builds", self.builds_);
   f("contact/handed_over", self.handed_);
-  f("contact/dissipated", self.dissipated_);
+  f("contact/until_recheck", self.until_recheck_);
+  f("contact/stale_seen", self.stale_seen_);
 }
 
 template <int D>
@@ -336,6 +366,10 @@ void ContactSystem<D>::save_state(StateArrays& s) const {
   s.put_int("contact/pair_count", cur_.size);
   visit_pairs<D>(cur_, save);
   state_fields(*this, save);
+  const ContactStatus st = read_status();
+  s.put("contact/dissipated", st.dissipated);
+  s.put_int("contact/active", static_cast<long long>(st.active));
+  s.f64["contact/last_pass"] = {st.d2max, st.v2max, st.stale};
   // for people reading the file (not read back)
   s.put_int("contact/surface_nodes", ns_);
   s.put_int("contact/active_faces", na_);
@@ -373,7 +407,25 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
     for (int j = 0; j < size && ok; ++j) ok = face(j) >= 0 && face(j) < nf_;
     if (!ok) throw InputError("checkpoint '" + s.file + "': contact pair list is inconsistent");
   }
-  state_fields(*this, load);
+  ContactStatus st;
+  st.dissipated = s.get("contact/dissipated");
+  st.active = static_cast<double>(s.get_int("contact/active"));
+  if (s.has("contact/until_recheck")) {
+    state_fields(*this, load);
+    const std::vector<double>& p = s.array("contact/last_pass", 3);
+    st.d2max = p[0];
+    st.v2max = p[1];
+    st.stale = p[2];
+  } else {  // checkpoints from before the re-check schedule: their lists are rebuilt at once
+    auto older = [&](const char* name, auto& x) {
+      if (s.has(name)) load(name, x);
+    };
+    state_fields(*this, older);
+    need_build_ = true;
+  }
+  auto h = Kokkos::create_mirror_view(status_);
+  h() = st;
+  Kokkos::deep_copy(status_, h);
 }
 
 template class ContactSystem<2>;

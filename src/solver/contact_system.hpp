@@ -15,6 +15,21 @@
 //
 // Broad phase: uniform cell grid + candidate lists, rebuilt only when a surface node has moved
 // more than half the skin since the last build. Narrow phase every step over the candidates.
+//
+// Synchronisation (GPU readiness): a step waits for the device only on the steps that re-check
+// something on the host; there the host reads one small device value, labelled kContactSyncLabel.
+// - The handover flag (set by the force kernel) every 25 steps while interfaces are left.
+// - The status of the narrow phase (ContactStatus: totals and the largest displacement since the
+//   build and the largest speed) on the steps the candidate lists are re-checked. A check at step s
+//   sees the pass of step s - 1 (displacement d, speed v): the lists are rebuilt when
+//   d + 2 v dt > skin / 2 (the test of every step before: the displacement at the next step is
+//   bounded by this one plus a step at twice the largest speed), else the next check comes after
+//   K = floor((skin / 2 - d) / (2 v dt)) steps (at most 25). While the speeds stay below twice v,
+//   no step in between meets the rebuild test, so the lists are rebuilt on the same steps as by a
+//   check on every step (checks come every step as the bound nears half the skin). Passes on
+//   outdated lists (a node beyond half the skin from its build position) are counted on the device
+//   (stale_passes) and lead to a rebuild at the next check.
+// The energies and statistics read the status when asked (sampled steps).
 #include <memory>
 #include <vector>
 
@@ -26,6 +41,9 @@
 #include "solver/contact_topology.hpp"
 
 namespace fdem {
+
+// Label of the device values the contact system reads on its re-check steps (tests/test_gpu_ready.cpp).
+inline constexpr char kContactSyncLabel[] = "fdem::contact::sync";
 
 // The 'enabled' rule of the case's contact object: on/off as given; "auto" (default): on when the
 // mesh has interfaces or more than one body (connected piece of elements).
@@ -54,8 +72,8 @@ class ContactSystem {
   double stable_step() const { return stable_; }
   // Elastic energy in the contact springs at the last update.
   double elastic_energy() const;
-  // Energy dissipated by friction (and released shear springs) so far.
-  double dissipated() const { return dissipated_; }
+  // Energy dissipated by friction (and released shear springs) so far (reads the device status).
+  double dissipated() const { return read_status().dissipated; }
 
   ContactLaw law{};      // penalty, friction, tolerances (public: tests change friction)
   // Frictionless contact (law.mu = 0, law.coh = 0) computes and stores no shear springs (same
@@ -69,8 +87,13 @@ class ContactSystem {
   int surface_nodes() const { return ns_; }
   int active_faces() const { return na_; }
   int candidates() const { return cur_.size; }
-  int active_contacts() const { return active_; }
+  int active_contacts() const;  // in the last pass (reads the device status)
   long builds() const { return builds_; }
+  // Host reads of device values during update() so far (the re-check steps), and passes over
+  // candidate lists that were outdated (reads the device status; 0 unless the speeds grew by more
+  // than the margin of the re-check schedule).
+  long syncs() const { return syncs_; }
+  long stale_passes() const { return static_cast<long>(read_status().stale); }
   // Changes whenever the surfaces change (active faces, surface nodes, contact areas).
   long surface_version() const { return surface_version_; }
   // Each node's largest possible contact area for rigid platens (its share of every face it can
@@ -127,12 +150,17 @@ class ContactSystem {
   bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
-  int active_ = 0;
-  long builds_ = 0, handed_ = 0, surface_version_ = 0;
+  int until_recheck_ = 0;  // steps to the next re-check of the candidate lists (0: this step)
+  double stale_seen_ = 0;  // stale passes at the last re-check
+  long builds_ = 0, handed_ = 0, surface_version_ = 0, syncs_ = 0;
   std::vector<double> potential_area_;
   Scatter own_scatter_;  // update() without a scatter view
   size_t own_scatter_size_ = 0;
-  double dissipated_ = 0;
+  Kokkos::View<ContactSums> pass_;      // sums of the last narrow-phase pass
+  Kokkos::View<ContactStatus> status_;  // totals on the device (contact_account)
+  ContactStatus read_status() const;
+  // The re-check of the candidate lists (see "Synchronisation" above) from the last pass.
+  void recheck(double dt);
 };
 
 extern template class ContactSystem<2>;

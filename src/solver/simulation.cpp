@@ -31,9 +31,14 @@ void Simulation<D>::set_strength_reduction(double factor) {
 template <int D>
 void Simulation<D>::step(bool sample) {
   sample = sample || !have_reference_;
+  // The phases are timed on sampled steps only: a clock that stops when its phase's kernels have
+  // finished needs a fence, and an unsampled step waits for nothing (tests/test_gpu_ready.cpp).
+  const bool timed = sample;
+  if (timed) fence("fdem::step: before the phase clocks");  // the work queued before is not this step's
   Kokkos::Timer clock;
-  auto lap = [&clock](double& phase) {  // the phase's kernels finish before its clock stops
-    Kokkos::fence();
+  auto lap = [&clock, timed](double& phase) {  // the phase's kernels finish before its clock stops
+    if (!timed) return;
+    fence("fdem::step: phase clock");
     phase += clock.seconds();
     clock.reset();
   };
@@ -62,6 +67,7 @@ void Simulation<D>::step(bool sample) {
   ++step_count;
   lap(phase_times_.ledger);
   ++phase_times_.steps;
+  if (timed) ++phase_times_.timed;
 }
 
 template <int D>
@@ -94,7 +100,9 @@ Energies Simulation<D>::sample_energies(bool sample) {
 
 template <int D>
 void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
-  if (sample) {
+  if (!sample) return;  // this step's works are in work_dev_
+  pull_works();
+  {
     // Works done by time t: everything before this step plus half of this step's increment
     // (the increments are centred on x(n)).
     Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
@@ -123,6 +131,23 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
   }
   work_damping_ += w.damping;
   work_bc_ += w.bc_work;
+  push_works();
+}
+
+template <int D>
+void Simulation<D>::pull_works() const {
+  auto h = Kokkos::create_mirror_view(work_dev_);
+  Kokkos::deep_copy(h, work_dev_);
+  work_damping_ = h(0);
+  work_bc_ = h(1);
+}
+
+template <int D>
+void Simulation<D>::push_works() {
+  auto h = Kokkos::create_mirror_view(work_dev_);
+  h(0) = work_damping_;
+  h(1) = work_bc_;
+  Kokkos::deep_copy(work_dev_, h);
 }
 
 template <int D>
@@ -160,7 +185,10 @@ NodeSums Simulation<D>::update_nodes_now(bool sample) {
   dtv_next_ = 0;
   const bool damp = !skips.damping || prm_.alpha != 0.0 || prm_.cmass != 0.0;
   if (sample) return damp ? update_nodes<D, true, true>(m, prm_) : update_nodes<D, true, false>(m, prm_);
-  return damp ? update_nodes<D, false, true>(m, prm_) : update_nodes<D, false, false>(m, prm_);
+  // unsampled: the works are summed on the device (work_dev_; book_energies)
+  if (damp) update_nodes_unsampled<D, true>(m, prm_, node_sums_, work_dev_);
+  else update_nodes_unsampled<D, false>(m, prm_, node_sums_, work_dev_);
+  return NodeSums{};
 }
 
 template <int D>
@@ -351,6 +379,7 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
 
 template <int D>
 void Simulation<D>::save_state(StateArrays& s) const {
+  pull_works();
   StateSaver saver(s);
   const_cast<Simulation*>(this)->checkpoint_fields(saver);  // the saver only reads
   if (contact_) contact_->save_state(s);
@@ -378,6 +407,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
     throw InputError("checkpoint '" + s.file + "' has contact state but this case has no contact");
   StateLoader loader(s);
   checkpoint_fields(loader);
+  push_works();
   if (contact_) {
     contact_->load_state(s, m);
     sync_platen_nodes();

@@ -39,15 +39,17 @@ constexpr int kEnergyFieldCount = 14;
 std::vector<double> energies_to_vector(const Energies& e);
 Energies energies_from_vector(const std::vector<double>& v);
 
-// Wall time of each phase of step(), summed over the steps so far (s). The kernels of a phase are
-// fenced before its clock stops, so on a GPU backend the figures are the phases' own times.
+// Wall time of each phase of step(), summed over the timed steps so far (s): the sampled ones (an
+// unsampled step waits for no clock). The kernels of a phase are fenced before its clock stops, so
+// on a GPU backend the figures are the phases' own times.
 struct PhaseTimes {
   double forces = 0;   // bulk elements and cohesive interfaces (the fused force kernel)
   double platens = 0;  // rigid platens
   double contact = 0;  // handover, broad phase, narrow phase, and the one contribute of the forces
   double ledger = 0;   // energies, reactions and momentum on sampled steps
   double nodes = 0;    // node update (damping, velocity BCs, leap-frog)
-  long steps = 0;
+  long steps = 0;  // all steps
+  long timed = 0;  // the timed ones
   double total() const { return forces + platens + contact + ledger + nodes; }
 };
 
@@ -66,7 +68,7 @@ class Simulation {
   // (full reductions: do it on output and check steps only) and kept for energies().
   void step(bool sample = false);
   // The node update of step(): advances x and v from the forces in m.f and zeroes m.f (public for
-  // the benchmarks; step() calls it).
+  // the benchmarks; step() calls it). Unsampled: the sums stay on the device (zeros returned).
   NodeSums update_nodes_now(bool sample);
   // The velocity step of the last node update: (dt before + dt after) / 2 on the step where dt
   // changed, dt otherwise (the momentum change of a node over a step is its force times this).
@@ -173,7 +175,13 @@ class Simulation {
   template <class Fields>
   void checkpoint_fields(Fields& f);
   double gravity_[3] = {0, 0, 0};
-  double work_damping_ = 0, work_bc_ = 0;
+  // Works of damping and velocity BCs so far: on the device (work_dev_: 0 damping, 1 BCs, summed
+  // there on unsampled steps), on the host on sampled steps (pull_works, then push_works).
+  mutable double work_damping_ = 0, work_bc_ = 0;
+  Kokkos::View<double[2]> work_dev_{"fdem::work"};
+  Kokkos::View<NodeSums> node_sums_{"fdem::node_sums"};
+  void pull_works() const;
+  void push_works();
   double reference_ = 0;  // energy minus external work at the reference step
   bool have_reference_ = false;
   double energy_floor_ = 0;  // energies below this are round-off (strain energy at strain 1e-6)

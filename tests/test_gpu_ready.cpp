@@ -1,0 +1,261 @@
+// GPU readiness (issue 19): an unsampled step (Simulation::step(false)) asks for no fence, no copy
+// between memories and no reduction or scan whose result goes to the host: on a GPU each of these
+// stops the host until the device has caught up. The test records Kokkos' profiling events
+// (Kokkos Tools callbacks registered in-process) while a scene with contact steps, and names the
+// offending ones.
+//
+// What is allowed in an unsampled step: kernel launches (parallel_for); reductions and scans into
+// device memory, whose labels end in kDeviceResult (kernels/fdem_kokkos.hpp: a reduction into a
+// host value has no other mark that the callbacks could see); and the contact system's periodic
+// reads of its device status, one small copy labelled kContactSyncLabel at most every step on
+// which ContactSystem::update re-checks its candidate lists or the handover flag
+// (solver/contact_system.hpp, "Synchronisation"): the test counts them and requires them rare.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "scenes.hpp"
+#include "solver/simulation.hpp"
+#include "solver_fixtures.hpp"
+
+namespace {
+
+using namespace fdem;
+
+struct Recorded {
+  std::vector<std::string> fences, copies, host_reductions;
+  long launches = 0, device_reductions = 0, sync_copies = 0;
+};
+
+Recorded* g_rec = nullptr;  // recording while not null
+bool g_in_sync = false;     // inside a copy of the contact system's status (its fences are its own)
+
+bool device_result(const char* name) {
+  const std::string s(name);
+  const std::string mark(kDeviceResult);
+  return s.size() >= mark.size() && s.compare(s.size() - mark.size(), mark.size(), mark) == 0;
+}
+
+void on_fence(const char* name, const uint32_t, uint64_t* id) {
+  *id = 0;
+  if (g_rec && !g_in_sync) g_rec->fences.push_back(name);
+}
+void on_copy(Kokkos_Profiling_SpaceHandle dst, const char* dst_name, const void*,
+             Kokkos_Profiling_SpaceHandle src, const char* src_name, const void*, uint64_t bytes) {
+  if (!g_rec) return;
+  const std::string d(dst_name), s(src_name);
+  if (d.find(kContactSyncLabel) != std::string::npos || s.find(kContactSyncLabel) != std::string::npos) {
+    ++g_rec->sync_copies;
+    g_in_sync = true;
+    return;
+  }
+  g_rec->copies.push_back(s + " (" + src.name + ") -> " + d + " (" + dst.name + "), " +
+                          std::to_string(bytes) + " bytes");
+}
+void on_copy_end() { g_in_sync = false; }
+void on_reduce(const char* name, const uint32_t, uint64_t* id) {
+  *id = 0;
+  if (!g_rec) return;
+  if (device_result(name))
+    ++g_rec->device_reductions;
+  else
+    g_rec->host_reductions.push_back(std::string("reduce ") + name);
+}
+void on_scan(const char* name, const uint32_t, uint64_t* id) {
+  *id = 0;
+  if (!g_rec) return;
+  if (device_result(name))
+    ++g_rec->device_reductions;
+  else
+    g_rec->host_reductions.push_back(std::string("scan ") + name);
+}
+void on_for(const char*, const uint32_t, uint64_t* id) {
+  *id = 0;
+  if (g_rec) ++g_rec->launches;
+}
+
+// Registers the callbacks while it lives (nothing else in the test binary uses Kokkos Tools).
+struct Hooks {
+  Hooks() {
+    namespace T = Kokkos::Tools::Experimental;
+    T::set_begin_fence_callback(on_fence);
+    T::set_begin_deep_copy_callback(on_copy);
+    T::set_end_deep_copy_callback(on_copy_end);
+    T::set_begin_parallel_reduce_callback(on_reduce);
+    T::set_begin_parallel_scan_callback(on_scan);
+    T::set_begin_parallel_for_callback(on_for);
+  }
+  ~Hooks() {
+    g_rec = nullptr;
+    namespace T = Kokkos::Tools::Experimental;
+    T::set_begin_fence_callback(nullptr);
+    T::set_begin_deep_copy_callback(nullptr);
+    T::set_end_deep_copy_callback(nullptr);
+    T::set_begin_parallel_reduce_callback(nullptr);
+    T::set_begin_parallel_scan_callback(nullptr);
+    T::set_begin_parallel_for_callback(nullptr);
+  }
+};
+
+std::string list(const std::vector<std::string>& v) {
+  std::map<std::string, int> count;
+  for (const auto& s : v) ++count[s];
+  std::string out;
+  for (const auto& [s, n] : count) out += "\n    " + s + " (x" + std::to_string(n) + ")";
+  return out;
+}
+
+template <int D>
+HostMesh cracked_block(int n) {
+  HostMesh m = D == 2 ? generate_crossed_rectangle(0, 0, 0.04, 0.04, n, n, "body")
+                      : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
+  insert_interfaces(m, {true});
+  return m;
+}
+
+// A block cracked into single elements on a fixed base under gravity, pressed by a platen from
+// above, shaken: fragments in contact with friction, candidate lists rebuilt as they move.
+template <int D>
+Case pressed_case() {
+  auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
+  c.interface_materials = {fdem_test::strong_interface(2e7 / 0.01, 0.8e7 / 0.01)};
+  c.fracture_material = 0;
+  c.contact.enabled = 1;
+  c.contact.friction = 0.5;
+  VelocityBC fix;
+  fix.set = D == 2 ? "ymin" : "zmin";
+  fix.active = {true, true, true};
+  c.velocity_bcs = {fix};
+  c.gravity = {0, 0, 0};
+  c.gravity[D - 1] = -9.81;
+  PlatenSpec p;
+  p.name = "top";
+  p.point[D - 1] = 0.0401;
+  p.normal[D - 1] = -1.0;
+  p.velocity[D - 1] = -0.05;
+  p.friction = 0.3;
+  c.platens = {p};
+  return c;
+}
+
+// What `n` unsampled steps of `sim` ask for: on the steps that neither re-check the contact
+// system's device status nor rebuild its candidate lists ("quiet" steps), on those that re-check
+// without a rebuild, and on those that rebuild (the grid and the list sizes come from the device).
+struct StepsRecord {
+  Recorded quiet, recheck, build;
+  int quiet_steps = 0, recheck_steps = 0, build_steps = 0;
+};
+
+template <int D>
+StepsRecord record_steps(Simulation<D>& sim, int n) {
+  StepsRecord out;
+  Hooks hooks;
+  for (int s = 0; s < n; ++s) {
+    const long syncs = sim.contact()->syncs(), builds = sim.contact()->builds();
+    Recorded r;
+    const long fences = fence_count();
+    g_rec = &r;
+    sim.step(false);
+    g_rec = nullptr;
+    for (long k = fences; k < fence_count(); ++k) r.fences.push_back("fdem::fence");
+    const bool synced = sim.contact()->syncs() != syncs, built = sim.contact()->builds() != builds;
+    Recorded& into = built ? out.build : synced ? out.recheck : out.quiet;
+    ++(built ? out.build_steps : synced ? out.recheck_steps : out.quiet_steps);
+    using List = std::vector<std::string> Recorded::*;
+    for (List v : {&Recorded::fences, &Recorded::copies, &Recorded::host_reductions})
+      (into.*v).insert((into.*v).end(), (r.*v).begin(), (r.*v).end());
+    into.launches += r.launches;
+    into.device_reductions += r.device_reductions;
+    into.sync_copies += r.sync_copies;
+  }
+  return out;
+}
+
+template <int D>
+void unsampled_steps_scene() {
+  const HostMesh mesh = cracked_block<D>(D == 2 ? 4 : 2);
+  Simulation<D> sim(pressed_case<D>(), mesh);
+  ASSERT_NE(sim.contact(), nullptr);
+  fdem_test::fail_all_interfaces(sim);
+  fdem_test::shake(sim, D == 2 ? 0.05 : 0.2);
+  for (int s = 0; s < 20; ++s) sim.step(s % 10 == 0);  // warm-up: first build, sampled steps
+  const long syncs0 = sim.contact()->syncs();
+  const int n = 300;
+  const StepsRecord r = record_steps(sim, n);
+  const std::string what = std::to_string(D) + "D, " + std::to_string(n) + " unsampled steps";
+  // the scene exercises what it should, and the hooks see the step's kernels
+  EXPECT_GT(sim.contact()->active_contacts(), 0) << what << ": the fragments should touch";
+  EXPECT_GT(r.build_steps, 0) << what << ": the candidate lists should be rebuilt";
+  EXPECT_GE(r.quiet.launches, 4L * r.quiet_steps) << what << ": the hooks should see the step's kernels";
+  EXPECT_GE(r.quiet.device_reductions, r.quiet_steps) << what << ": the contact pass reduces on the device";
+  // quiet steps: nothing that stops the host
+  EXPECT_TRUE(r.quiet.fences.empty()) << what << ", quiet steps: fences" << list(r.quiet.fences);
+  EXPECT_TRUE(r.quiet.copies.empty()) << what << ", quiet steps: copies" << list(r.quiet.copies);
+  EXPECT_EQ(r.quiet.sync_copies, 0) << what << ", quiet steps: status reads";
+  EXPECT_TRUE(r.quiet.host_reductions.empty())
+      << what << ", quiet steps: reductions or scans into host memory" << list(r.quiet.host_reductions);
+  // re-check steps without a rebuild: one status read each, nothing else
+  EXPECT_EQ(r.recheck.sync_copies + r.build.sync_copies, sim.contact()->syncs() - syncs0) << what;
+  EXPECT_EQ(r.recheck.sync_copies, r.recheck_steps) << what;
+  EXPECT_TRUE(r.recheck.fences.empty()) << what << ", re-check steps: fences" << list(r.recheck.fences);
+  EXPECT_TRUE(r.recheck.copies.empty()) << what << ", re-check steps: copies" << list(r.recheck.copies);
+  EXPECT_TRUE(r.recheck.host_reductions.empty())
+      << what << ", re-check steps: host reductions" << list(r.recheck.host_reductions);
+  // the steps that wait are few
+  EXPECT_GT(r.quiet_steps, 2 * n / 3)
+      << what << ": " << r.recheck_steps << " re-check steps, " << r.build_steps << " rebuilds";
+  EXPECT_EQ(sim.contact()->stale_passes(), 0) << what << ": passes over outdated candidate lists";
+  std::printf("%s: %d quiet steps, %d re-check steps, %d rebuild steps; on these:%s%s%s\n", what.c_str(),
+              r.quiet_steps, r.recheck_steps, r.build_steps, list(r.build.fences).c_str(),
+              list(r.build.copies).c_str(), list(r.build.host_reductions).c_str());
+}
+
+TEST(GpuReady, UnsampledStepsDoNotWaitForTheDevice2D) { unsampled_steps_scene<2>(); }
+TEST(GpuReady, UnsampledStepsDoNotWaitForTheDevice3D) { unsampled_steps_scene<3>(); }
+
+// The test can fail: the hooks see what a sampled step asks for (its clocks fence, the energies are
+// reductions into host values, the platen accumulators are copied to the host).
+TEST(GpuReady, HooksSeeWhatASampledStepAsksFor) {
+  const HostMesh mesh = cracked_block<2>(3);
+  Simulation<2> sim(pressed_case<2>(), mesh);
+  fdem_test::fail_all_interfaces(sim);
+  for (int s = 0; s < 3; ++s) sim.step(s == 0);
+  Recorded r;
+  {
+    Hooks hooks;
+    const long fences = fence_count();
+    g_rec = &r;
+    sim.step(true);
+    g_rec = nullptr;
+    for (long k = fences; k < fence_count(); ++k) r.fences.push_back("fdem::fence");
+  }
+  EXPECT_FALSE(r.fences.empty());
+  EXPECT_FALSE(r.copies.empty());
+  EXPECT_FALSE(r.host_reductions.empty());
+  EXPECT_GT(r.launches, 0);
+}
+
+// Kokkos 3.4.1 reports no fence of a host backend to the hooks: every fence in src/ and kernels/
+// goes through fdem::fence (kernels/fdem_kokkos.hpp), which counts them.
+TEST(GpuReady, EveryFenceIsCounted) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> raw;
+  for (const char* dir : {"src", "kernels"})
+    for (const auto& e : fs::recursive_directory_iterator(fs::path(FDEM_SOURCE_DIR) / dir)) {
+      if (!e.is_regular_file() || e.path().filename() == "fdem_kokkos.hpp") continue;
+      std::ifstream in(e.path());
+      std::string line;
+      for (int n = 1; std::getline(in, line); ++n)
+        if (line.find("Kokkos::fence") != std::string::npos || line.find(".fence()") != std::string::npos)
+          raw.push_back(e.path().string() + ":" + std::to_string(n));
+    }
+  EXPECT_TRUE(raw.empty()) << "fences not counted (use fdem::fence):" << list(raw);
+}
+
+}  // namespace
