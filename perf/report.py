@@ -688,6 +688,8 @@ class Report:
         self.lines = self.lines[:body_start]
         self.summary()
         self.lines += body
+        self.w("The 3D impact end to end (kernel times, narrow phase, GPU readiness): `docs/performance-impact.md`.")
+        self.w()
         self.w("## How to reproduce")
         self.w()
         self.w("    perf/run_all            # the full study (about 1 to 1.5 hours on 2 cores); writes this page")
