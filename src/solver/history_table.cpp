@@ -98,8 +98,9 @@ void HistoryTable<D>::open(const std::string& out, bool restarted) {
 template <int D>
 std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim) {
   std::vector<double> row = {last_.time, static_cast<double>(last_.step)};
+  const auto forces = sim.platen_forces();  // one copy from the device for all platens
   for (int p = 0; p < sim.m.platens.count; ++p) {
-    const auto F = sim.platen_force(p);
+    const auto& F = forces[p];
     const auto& P = sim.m.platens.p[p];
     const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
     const double disp = sim.platen_displacement(p, last_.time);
@@ -139,8 +140,9 @@ bool HistoryTable<D>::sample_loads(const Simulation<D>& sim, double t0) {
   // the next sample: the first step at or after the next multiple of the interval
   next_sample_ = sample_dt_ * (std::floor(t0 / sample_dt_ * (1 + 1e-12)) + 1);
   bool stop = false;
+  const auto forces = sim.platen_forces();  // one copy from the device for all platens
   for (int p = 0; p < sim.m.platens.count; ++p) {
-    const auto F = sim.platen_force(p);
+    const auto& F = forces[p];
     const auto& P = sim.m.platens.p[p];
     const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
     if (load > peak_[p]) {

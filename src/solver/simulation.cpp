@@ -273,6 +273,15 @@ std::array<double, 3> Simulation<D>::platen_force(int p) const {
 }
 
 template <int D>
+std::vector<std::array<double, 3>> Simulation<D>::platen_forces() const {
+  Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
+  std::vector<std::array<double, 3>> out(m.platens.count);
+  for (int p = 0; p < m.platens.count; ++p)
+    for (int k = 0; k < 3; ++k) out[p][k] = platen_acc_host_(p, kPlatenForce + k);
+  return out;
+}
+
+template <int D>
 double Simulation<D>::platen_displacement(int p, double at) const {
   const auto& P = m.platens.p[p];
   return std::sqrt(P.vel[0] * P.vel[0] + P.vel[1] * P.vel[1] + P.vel[2] * P.vel[2]) * at;

@@ -105,6 +105,8 @@ class Simulation {
   // Platen force on the body (3 components) of the last step, and its displacement along its
   // velocity direction at time `at`.
   std::array<double, 3> platen_force(int p) const;
+  // The same for every platen, with one copy from the device.
+  std::vector<std::array<double, 3>> platen_forces() const;
   double platen_displacement(int p, double at) const;
   // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
   // forces of the last step (call before step() clears them: use sample_reactions()).
