@@ -12,4 +12,5 @@
 #include "kernels/contact/broad_phase.hpp"
 #include "kernels/contact/geometry.hpp"
 #include "kernels/contact/narrow_phase.hpp"
+#include "kernels/contact/status.hpp"
 #include "kernels/contact/surfaces.hpp"
