@@ -21,6 +21,7 @@
 #include <unordered_map>
 
 #include "common/error.hpp"
+#include "common/setup_times.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
 #include "mesh/mesh_internal.hpp"
@@ -130,6 +131,31 @@ std::string lower_ext(const std::string& path) {
   return ext;
 }
 
+// Wall and CPU seconds of f() added to `into` (GmshTimes).
+template <class F>
+auto timed(double (&into)[2], F&& f) -> decltype(f()) {
+  struct Add {
+    double (&into)[2];
+    std::chrono::steady_clock::time_point w0 = std::chrono::steady_clock::now();
+    double c0 = setup_times::process_cpu_seconds();
+    ~Add() {
+      into[0] += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+      into[1] += setup_times::process_cpu_seconds() - c0;
+    }
+  } add{into};
+  return f();
+}
+
+// The Gmsh session's times into the set-up phases: its meshing, extraction and the rest (the
+// child process, the copy of the mesh through the pipe) of `total` wall / cpu seconds.
+void record_gmsh_times(const GmshTimes& t, double total_wall, double total_cpu) {
+  if (t.trial[0] > 0) setup_times::add("gmsh_trial_meshes", t.trial[0], t.trial[1]);
+  setup_times::add("gmsh_meshing", t.mesh[0], t.mesh[1]);
+  setup_times::add("gmsh_extraction", t.extract[0], t.extract[1]);
+  setup_times::add("gmsh_process", std::max(0.0, total_wall - t.trial[0] - t.mesh[0] - t.extract[0]),
+                   std::max(0.0, total_cpu - t.trial[1] - t.mesh[1] - t.extract[1]));
+}
+
 // ---- Gmsh in a child process ----
 // Gmsh can abort the whole process: an error thrown inside its OpenMP regions ends in
 // std::terminate (a .geo surface of zero area), and an assertion or an allocation failure in a
@@ -229,6 +255,7 @@ Extracted unpack(const std::string& b) {
   m.node_origin = u.vec<int>();
   const auto tags = u.vec<std::uint64_t>();
   ex.elem_tags.assign(tags.begin(), tags.end());
+  ex.times = u.get<GmshTimes>();
   return ex;
 }
 
@@ -324,6 +351,8 @@ std::string signal_name(int sig) {
 template <class F>
 Extracted run_gmsh_isolated(const std::string& source, const std::string& doing, F&& work) {
   std::lock_guard<std::mutex> lock(gmsh_mutex());
+  const auto wall0 = std::chrono::steady_clock::now();
+  const double cpu0 = setup_times::process_cpu_seconds();
   std::fflush(nullptr);
   std::FILE* log = std::tmpfile();
   int fds[2];
@@ -338,7 +367,11 @@ Extracted run_gmsh_isolated(const std::string& source, const std::string& doing,
   if (pid < 0) {  // no child: Gmsh in this process
     if (log) std::fclose(log);
     GmshSession session(false);
-    return work();
+    Extracted ex = work();
+    record_gmsh_times(ex.times,
+                      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(),
+                      setup_times::process_cpu_seconds() - cpu0);
+    return ex;
   }
   if (pid == 0) {  // the child: never returns, never runs the parent's exit handlers
     ::close(fds[0]);
@@ -381,10 +414,17 @@ Extracted run_gmsh_isolated(const std::string& source, const std::string& doing,
   }
   const std::string excerpt = log_excerpt(log);
   if (log) std::fclose(log);
+  setup_times::note_gmsh_peak(static_cast<double>(ru.ru_maxrss) * 1024.0);
   if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && !data.empty()) {
     if (data[0] == 'E') throw InputError(data.substr(1));
     if (data[0] == 'X') throw InputError(source + ": Gmsh could not " + doing + ": " + data.substr(1));
-    if (data[0] == 'M') return unpack(data);
+    if (data[0] == 'M') {
+      Extracted ex = unpack(data);
+      record_gmsh_times(ex.times,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count(),
+                        setup_times::process_cpu_seconds() - cpu0);  // the child's CPU time included
+      return ex;
+    }
   }
   std::string how = WIFSIGNALED(status) ? "was killed by " + signal_name(WTERMSIG(status))
                                         : "exited with status " + std::to_string(WEXITSTATUS(status));
@@ -571,17 +611,22 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
     });
     std::string err = GmshSession::first_error();
     if (!err.empty()) throw InputError(path + ": Gmsh could not read the file: " + err);
+    GmshTimes t;
     if (geo) {
-      refuse_oversized_geo(path, dim, element_size);
+      timed(t.trial, [&] { refuse_oversized_geo(path, dim, element_size); });
       if (element_size > 0) {  // an upper bound on the element size, over the file's own sizes
         gmsh::option::setNumber("Mesh.CharacteristicLengthMin", 0.0);
         gmsh::option::setNumber("Mesh.CharacteristicLengthMax", element_size);
       }
-      gmsh_call(path, "mesh the geometry", [&] { gmsh::model::mesh::generate(dim); });
+      timed(t.mesh, [&] { gmsh_call(path, "mesh the geometry", [&] { gmsh::model::mesh::generate(dim); }); });
       err = GmshSession::first_error();
       if (!err.empty()) throw InputError(path + ": Gmsh could not mesh the geometry: " + err);
     }
-    return gmsh_call(path, "extract the mesh", [&] { return extract_model(dim, path); });
+    Extracted ex = timed(t.extract, [&] {
+      return gmsh_call(path, "extract the mesh", [&] { return extract_model(dim, path); });
+    });
+    ex.times = t;
+    return ex;
   });
   if (geo && element_size > 0) check_size_honoured(ex.mesh, path, element_size);
   check_elements_impl(ex.mesh, path, &ex.elem_tags);
@@ -639,8 +684,11 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       const int pc = gmsh::model::addPhysicalGroup(1, curves);
       gmsh::model::setPhysicalName(1, pc, "boundary");
       set_mesh_size(h);
-      gmsh::model::mesh::generate(2);
-      return extract_model(2, who);
+      GmshTimes t;
+      timed(t.mesh, [&] { gmsh::model::mesh::generate(2); });
+      Extracted ex = timed(t.extract, [&] { return extract_model(2, who); });
+      ex.times = t;
+      return ex;
     });
   });
   check_size_honoured(ex.mesh, who, h);
@@ -668,8 +716,11 @@ HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h
       const int ps = gmsh::model::addPhysicalGroup(2, surfs);
       gmsh::model::setPhysicalName(2, ps, "surface");
       set_mesh_size(h);
-      gmsh::model::mesh::generate(3);
-      return extract_model(3, who);
+      GmshTimes t;
+      timed(t.mesh, [&] { gmsh::model::mesh::generate(3); });
+      Extracted ex = timed(t.extract, [&] { return extract_model(3, who); });
+      ex.times = t;
+      return ex;
     });
   });
   check_size_honoured(ex.mesh, who, h);

@@ -45,10 +45,18 @@ void orient_positively(HostMesh& m);
 void check_elements_impl(const HostMesh& mesh, const std::string& source,
                          const std::vector<std::size_t>* elem_tags);
 
+// Wall and CPU seconds of the Gmsh session's parts, measured in its process (setup_times).
+struct GmshTimes {
+  double trial[2] = {0, 0};    // trial meshes of the memory check (.geo files)
+  double mesh[2] = {0, 0};     // gmsh::model::mesh::generate
+  double extract[2] = {0, 0};  // extract_model
+};
+
 // A mesh taken from the current Gmsh model (gmsh_extract.cpp), with Gmsh's tag of each element.
 struct Extracted {
   HostMesh mesh;
   std::vector<std::size_t> elem_tags;
+  GmshTimes times;
 };
 // Turn the current Gmsh model's mesh into a HostMesh (call inside a Gmsh session). Does not check
 // element orientation. Throws InputError naming `source`.

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "common/setup_times.hpp"
 #include "kernels/interface.hpp"
 #include "solver/simulation.hpp"
 
@@ -237,6 +238,8 @@ void build_interface_chunks(const HostMesh& mesh, Model<D>& m) {
 template <int D>
 Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   if (mesh.dim != D) throw InputError(given.file + ": mesh dimension does not match 'dimension'");
+  using setup_times::Phase;
+  Phase build("model_build");  // what the phases below do not cover
   // The derived values (a run has filled them already; a case built in code may not have).
   Case c = given;
   resolve_defaults(c, mesh);
@@ -247,8 +250,10 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   m.plane_stress = D == 2 && c.plane_stress;
 
   const MaterialTable mats = build_materials<D>(c, mesh, m);
+  Phase elements("model_elements");
   build_nodes<D>(mesh, m);
   const ElementSetup el = build_elements<D>(c, mesh, mats, m);
+  elements.stop();
   double emin = std::numeric_limits<double>::infinity();
   for (const auto& bm : c.materials) emin = std::min(emin, bm.E);
   energy_floor_ = 0.5 * emin * 1e-12 * el.volume;  // the strain energy at strain 1e-6
@@ -256,9 +261,11 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   sc.bulk = el.bulk_step;
   sc.bulk_element = el.bulk_element;
 
+  Phase interfaces("model_interfaces");
   sc.interfaces = build_interfaces<D>(c, mesh, el.mass, m);
   coh0_ = m.coh;
   build_interface_chunks<D>(mesh, m);
+  interfaces.stop();
 
   if (!c.platens.empty()) {
     build_boundary_areas<D>(mesh, m);
@@ -277,6 +284,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   set_initial_velocities<D>(c, mesh, bcs, m);
 
   if (contact_wanted(c, mesh)) {
+    Phase contact("contact_setup");
     contact_ = std::make_unique<ContactSystem<D>>(c, mesh, m, el.mass);
     mu0_ = contact_->law.mu;
     sc.has_contact = true;

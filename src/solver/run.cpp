@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "common/error.hpp"
+#include "common/setup_times.hpp"
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
 #include "io/output.hpp"
@@ -19,15 +20,23 @@ namespace fdem {
 namespace {
 
 // Mesh of a case, ready for the solver: built or read, checked, renumbered, interfaces inserted.
+// Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
 HostMesh prepare_mesh(const Case& c) {
+  using setup_times::Phase;
+  Phase build("mesh");
   HostMesh mesh = build_mesh(c.mesh, c.dim);
+  build.stop();
+  Phase checks("mesh_checks");
   const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
   check_elements(mesh, source);
   check_case_against_mesh(c, mesh);
   mesh.warnings = check_bodies(mesh, source).warnings;  // duplicate nodes, overlapping bodies
   for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+  checks.stop();
+  Phase reorder("renumbering");
   reorder_for_locality(mesh);
   if (!c.fracturable_regions.empty()) {
+    Phase insert("interface_insertion");
     std::vector<bool> frac(mesh.region_names.size(), false);
     for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
     insert_interfaces(mesh, frac);
@@ -81,6 +90,7 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 }  // namespace
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
+  setup_times::reset();
   Case c = load_case(case_path, opt.overrides);
   if (!std::isfinite(opt.checkpoint_every))  // NaN too
     throw InputError("--checkpoint-every must be a finite time in seconds");

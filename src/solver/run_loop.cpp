@@ -4,6 +4,7 @@
 #include <csignal>
 #include <cstdio>
 
+#include "common/setup_times.hpp"
 #include "io/output.hpp"
 #include "solver/summary.hpp"
 
@@ -29,6 +30,7 @@ RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out,
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
+  setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   if (restart) sim_.load_state(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
   if (restart) {
@@ -77,12 +79,15 @@ void RunLoop<D>::announce() const {
 template <int D>
 nlohmann::json RunLoop<D>::run() {
   if (!restart_) {
+    setup_times::Phase outputs("output_setup");
     snaps_->take(sim_, frag_.get());
   } else if (opt_.progress) {
     std::fprintf(stderr,
                  "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
                  restart_->file.c_str(), sim_.step_count, sim_.t, history_->rows(), snaps_->frames());
   }
+  setup_times::finish();
+  if (opt_.progress) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/kernel_times.hpp"
+#include "common/setup_times.hpp"
 
 namespace fdem {
 
@@ -145,6 +146,11 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   summary["element_steps_per_second"] =
       r.loop_wall_seconds > 0 ? sim.step_count * double(sim.m.ne) / r.loop_wall_seconds : 0;
   summary["phases"] = phases_report(sim.phase_times());
+  summary["setup"] = setup_times::report();
+  const double peak = setup_times::peak_rss_bytes();
+  summary["memory"] = {{"peak_rss_bytes", peak},
+                       {"peak_rss_bytes_per_element", peak / std::max(1, sim.m.ne)},
+                       {"gmsh_peak_rss_bytes", setup_times::gmsh_peak_bytes()}};
   if (kernel_times::enabled()) summary["kernel_times"] = kernel_times::report();
   summary["energy"] = energy_report(last, history.max_relative_balance_error());
   summary["energy"]["warning_threshold"] = HistoryTable<D>::kBalanceWarning;
