@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdint>
@@ -235,6 +236,7 @@ void pack(std::string& b, const Extracted& ex) {
   put_vec(b, m.node_origin);
   std::vector<std::uint64_t> tags(ex.elem_tags.begin(), ex.elem_tags.end());
   put_vec(b, tags);
+  put(b, ex.times);
 }
 
 Extracted unpack(const std::string& b) {

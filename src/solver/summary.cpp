@@ -1,5 +1,6 @@
 #include "solver/summary.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
