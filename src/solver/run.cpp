@@ -35,6 +35,7 @@ HostMesh prepare_mesh(const Case& c) {
   checks.stop();
   Phase reorder("renumbering");
   reorder_for_locality(mesh);
+  reorder.stop();
   if (!c.fracturable_regions.empty()) {
     Phase insert("interface_insertion");
     std::vector<bool> frac(mesh.region_names.size(), false);
