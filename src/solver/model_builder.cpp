@@ -8,6 +8,7 @@
 
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
+#include "kernels/host_loops.hpp"
 #include "kernels/interface.hpp"
 #include "solver/simulation.hpp"
 
@@ -114,8 +115,9 @@ void build_nodes(const HostMesh& mesh, Model<D>& m) {
   m.v = Kokkos::View<double* [D]>("fdem::v", nn);
   m.f = Kokkos::View<double* [D]>("fdem::f", nn);
   auto X_h = mirror(m.X);
-  for (int i = 0; i < nn; ++i)
+  host_for("fdem::build_nodes", nn, [&](int i) {
     for (int k = 0; k < D; ++k) X_h(i, k) = mesh.X[static_cast<size_t>(i) * D + k];
+  });
   Kokkos::deep_copy(m.X, X_h);
   Kokkos::deep_copy(m.x, X_h);
 }
@@ -136,7 +138,10 @@ ElementSetup build_elements(const Case& c, const HostMesh& mesh, const MaterialT
   double fact = 1;
   for (int k = 2; k <= D; ++k) fact *= k;
   out.bulk_step = std::numeric_limits<double>::infinity();
-  for (int e = 0; e < ne; ++e) {
+  // Geometry element by element on the host's threads; then, in element order, the checks, the
+  // lumped masses (the same sums in the same order whatever the threads) and the bulk step.
+  std::vector<double> det_e(ne), dt_e(ne);
+  host_for("fdem::build_elements", ne, [&](int e) {
     double xe[D + 1][D], A[D][D], B[D][D];
     for (int a = 0; a < D + 1; ++a) {
       elem_h(e, a) = mesh.elems[static_cast<size_t>(e) * (D + 1) + a];
@@ -145,11 +150,8 @@ ElementSetup build_elements(const Case& c, const HostMesh& mesh, const MaterialT
     for (int i = 0; i < D; ++i)
       for (int b = 0; b < D; ++b) A[i][b] = xe[b + 1][i] - xe[0][i];
     const double dA = det<D>(A);
-    if (!(dA > 0)) {
-      std::ostringstream os;
-      os << c.file << ": element " << e << " is inverted or degenerate (signed measure " << dA / fact << ")";
-      throw InputError(os.str());
-    }
+    det_e[e] = dA;
+    if (!(dA > 0)) return;
     inverse<D>(A, B);  // rows of B are the gradients of N_1..N_D
     for (int b = 0; b < D; ++b)
       for (int j = 0; j < D; ++j) grad_h(e, b, j) = B[b][j];
@@ -157,11 +159,20 @@ ElementSetup build_elements(const Case& c, const HostMesh& mesh, const MaterialT
     vol_h(e) = meas * m.thickness;
     const int mt = mats.region_mat[mesh.elem_region[e]];
     emat_h(e) = mt;
-    for (int a = 0; a < D + 1; ++a) out.mass[elem_h(e, a)] += mats.rho[mt] * vol_h(e) / (D + 1);
     const double h = D * meas / largest_face<D>(xe);  // shortest altitude
-    const double dte = h / mats.cp[mt];
-    if (dte < out.bulk_step) {
-      out.bulk_step = dte;
+    dt_e[e] = h / mats.cp[mt];
+  });
+  for (int e = 0; e < ne; ++e) {
+    if (!(det_e[e] > 0)) {
+      std::ostringstream os;
+      os << c.file << ": element " << e << " is inverted or degenerate (signed measure " << det_e[e] / fact
+         << ")";
+      throw InputError(os.str());
+    }
+    const int mt = emat_h(e);
+    for (int a = 0; a < D + 1; ++a) out.mass[elem_h(e, a)] += mats.rho[mt] * vol_h(e) / (D + 1);
+    if (dt_e[e] < out.bulk_step) {
+      out.bulk_step = dt_e[e];
       out.bulk_element = e;
     }
   }
@@ -196,7 +207,8 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
   auto if_h = mirror(m.iface);
   auto ia_h = mirror(m.iarea);
   const double kmax = std::max(im.kn, im.ks);
-  for (int q = 0; q < ni; ++q) {
+  std::vector<double> step_q(ni);  // each interface's springs' stable step; their minimum below
+  host_for("fdem::build_interfaces", ni, [&](int q) {
     double xa[D][D], xb[D][D], n[D], ap;
     for (int k = 0; k < 2 * D; ++k) if_h(q, k) = mesh.ifaces[static_cast<size_t>(q) * 2 * D + k];
     for (int k = 0; k < D; ++k)
@@ -206,11 +218,14 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
       }
     interface_frame<D>(xa, xb, m.thickness, n, ap);
     ia_h(q) = ap;
+    double sq = std::numeric_limits<double>::infinity();
     for (int k = 0; k < D; ++k) {
       const double w = std::sqrt(kmax * ap * (1 / mass[if_h(q, k)] + 1 / mass[if_h(q, D + k)]));
-      step = std::min(step, 2.0 / w);
+      sq = std::min(sq, 2.0 / w);
     }
-  }
+    step_q[q] = sq;
+  });
+  for (int q = 0; q < ni; ++q) step = std::min(step, step_q[q]);
   Kokkos::deep_copy(m.iface, if_h);
   Kokkos::deep_copy(m.iarea, ia_h);
   return step;
