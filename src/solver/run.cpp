@@ -104,7 +104,7 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
   // The mesh (and a restart's match with it) before the folder is touched: a case whose mesh
   // cannot be made or would not fit leaves the results of an earlier run where they are.
-  const HostMesh mesh = prepare_mesh(c);
+  HostMesh mesh = prepare_mesh(c);
   const RunIdentity id{case_hash(c), mesh_hash(mesh)};
   const StateArrays* r = nullptr;
   if (!opt.restart.empty()) {
@@ -116,7 +116,9 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   // case.json: the case as run, with the derived values the run uses
   resolve_defaults(c, mesh);
   write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
-  return c.dim == 2 ? run_dim<2>(c, mesh, out, opt, id, r) : run_dim<3>(c, mesh, out, opt, id, r);
+  // the run takes the mesh and frees it once it is set up
+  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, opt, id, r)
+                    : run_dim<3>(c, std::move(mesh), out, opt, id, r);
 }
 
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides) {

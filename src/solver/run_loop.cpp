@@ -15,31 +15,33 @@ double seconds(std::chrono::steady_clock::duration d) { return std::chrono::dura
 }  // namespace
 
 template <int D>
-RunLoop<D>::RunLoop(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
                     const RunIdentity& id, const StateArrays* restart)
     : c_(c),
-      mesh_(mesh),
+      mesh_(std::make_unique<HostMesh>(std::move(mesh))),
       out_(out),
       opt_(opt),
       id_(id),
       restart_(restart),
       wall0_(Clock::now()),
       loop0_(wall0_),
-      sim_(c, mesh),
+      sim_(c, *mesh_),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   if (restart) sim_.load_state(*restart);
-  history_ = std::make_unique<HistoryTable<D>>(c, mesh, sim_);
+  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_);
   if (restart) {
     restore(*restart);
   } else {
     history_->open(out, false);
     if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
-    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, mesh, nullptr);
+    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr);
   }
+  counts_ = mesh_report(*mesh_);
+  mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
 }
@@ -58,7 +60,7 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   history_->open(out_, true);
   if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
-  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, mesh_, &s);
+  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s);
 }
 
 template <int D>
@@ -221,24 +223,24 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoints_written = ckpt_written_;
   r.restart = restart_;
   r.signal = signal_;
-  const nlohmann::json summary = run_summary(c_, mesh_, sim_, *history_, frag_.get(), r);
+  const nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
   write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   print_run_end(summary, r, sim_.step_count, opt_.progress);
   return summary;
 }
 
 template <int D>
-nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
                        const RunIdentity& id, const StateArrays* restart) {
-  RunLoop<D> run(c, mesh, out, opt, id, restart);
+  RunLoop<D> run(c, std::move(mesh), out, opt, id, restart);
   return run.run();
 }
 
 template class RunLoop<2>;
 template class RunLoop<3>;
-template nlohmann::json run_dim<2>(const Case&, const HostMesh&, const std::string&, const RunOptions&,
+template nlohmann::json run_dim<2>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
                                    const RunIdentity&, const StateArrays*);
-template nlohmann::json run_dim<3>(const Case&, const HostMesh&, const std::string&, const RunOptions&,
+template nlohmann::json run_dim<3>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
                                    const RunIdentity&, const StateArrays*);
 
 }  // namespace fdem

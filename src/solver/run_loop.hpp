@@ -23,8 +23,9 @@ namespace fdem {
 template <int D>
 class RunLoop {
  public:
-  // restart: the checkpoint to go on from (checked against the case by the caller), or null.
-  RunLoop(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+  // restart: the checkpoint to go on from (checked against the case by the caller), or null. The
+  // mesh is freed once the model and the outputs are set up (the run does not need it).
+  RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
           const RunIdentity& id, const StateArrays* restart);
   // Runs to the end time (or the step limit, or the stop rule); returns the summary written to
   // out/summary.json.
@@ -43,7 +44,8 @@ class RunLoop {
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
-  const HostMesh& mesh_;
+  std::unique_ptr<HostMesh> mesh_;  // null after the set-up
+  nlohmann::json counts_;           // mesh_report of the mesh, for summary.json
   const std::string out_;
   const RunOptions& opt_;
   const RunIdentity id_;
@@ -65,7 +67,7 @@ class RunLoop {
 
 // run_case's run of a prepared case in dimension D.
 template <int D>
-nlohmann::json run_dim(const Case& c, const HostMesh& mesh, const std::string& out, const RunOptions& opt,
+nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
                        const RunIdentity& id, const StateArrays* restart);
 
 extern template class RunLoop<2>;

@@ -129,13 +129,13 @@ nlohmann::json contact_report(ContactSystem<D>& ct) {
 }  // namespace
 
 template <int D>
-nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& sim,
+nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulation<D>& sim,
                            const HistoryTable<D>& history, RunFragments<D>* frag, const RunRecord& r) {
   const Energies& last = history.last();
   nlohmann::json summary;
   summary["case"] = c.name;
   summary["dimension"] = D;
-  summary["counts"] = mesh_report(mesh);
+  summary["counts"] = counts;
   summary["counts"]["boundary_nodes"] = r.boundary_nodes;
   summary["time_step"] = stable_report(sim);
   summary["steps"] = sim.step_count;
@@ -175,9 +175,9 @@ nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& s
   return summary;
 }
 
-template nlohmann::json run_summary(const Case&, const HostMesh&, Simulation<2>&, const HistoryTable<2>&,
+template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<2>&, const HistoryTable<2>&,
                                     RunFragments<2>*, const RunRecord&);
-template nlohmann::json run_summary(const Case&, const HostMesh&, Simulation<3>&, const HistoryTable<3>&,
+template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<3>&, const HistoryTable<3>&,
                                     RunFragments<3>*, const RunRecord&);
 
 void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress) {

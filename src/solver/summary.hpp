@@ -38,9 +38,10 @@ struct RunRecord {
   const StateArrays* restart = nullptr;  // the checkpoint the run went on from
 };
 
-// The summary of a finished run (frag: null without fragment analysis).
+// The summary of a finished run (counts: mesh_report of its mesh, taken before the mesh was freed;
+// frag: null without fragment analysis).
 template <int D>
-nlohmann::json run_summary(const Case& c, const HostMesh& mesh, Simulation<D>& sim,
+nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulation<D>& sim,
                            const HistoryTable<D>& history, RunFragments<D>* frag, const RunRecord& r);
 
 // The closing lines: steps and throughput on stderr (with progress on), where the results are
