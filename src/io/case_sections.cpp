@@ -88,10 +88,18 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);
   } else {
-    R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
+    if (g == "sphere")
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});
+    else
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
     s.radius = R.number(m, P, "radius", gt(0));
     s.element_size = R.number(m, P, "element_size", between(0, true, s.radius, false));
+    if (g == "sphere") {
+      s.mesher = R.string(m, P, "mesher", std::string("delaunay"));
+      if (s.mesher != "delaunay" && s.mesher != "hxt")
+        R.fail(child(P, "mesher"), "unknown mesher '" + s.mesher + "' (allowed: delaunay, hxt)");
+    }
   }
   s.region = R.name(m, P, "region", std::string("body"));
 }

@@ -697,9 +697,12 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
   return finish_generated(std::move(ex), who);
 }
 
-HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h, const std::string& region) {
+HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h, const std::string& region,
+                         const std::string& mesher) {
   const std::string who = "sphere generator";
   check_generator_args(who, R, h);
+  if (mesher != "delaunay" && mesher != "hxt")
+    throw InputError(who + ": unknown mesher '" + mesher + "' (allowed: delaunay, hxt)");
   if (R / h > 200)
     throw InputError(who + ": radius / element_size = " + fmt(R / h) +
                      " is above the limit 200: give mesh.element_size >= " + fmt(R / 200));
@@ -718,6 +721,7 @@ HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h
       const int ps = gmsh::model::addPhysicalGroup(2, surfs);
       gmsh::model::setPhysicalName(2, ps, "surface");
       set_mesh_size(h);
+      if (mesher == "hxt") gmsh::option::setNumber("Mesh.Algorithm3D", 10);  // threads: General.NumThreads 1
       GmshTimes t;
       timed(t.mesh, [&] { gmsh::model::mesh::generate(3); });
       Extracted ex = timed(t.extract, [&] { return extract_model(3, who); });

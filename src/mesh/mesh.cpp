@@ -413,7 +413,7 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     if (R > 0 && h > 0 && h <= R)
       check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h), 3,
                            "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h);
-    return generate_sphere(spec.origin, spec.radius, spec.element_size, region);
+    return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +
                    "' (expected file, rectangle, disc, box or sphere)");
