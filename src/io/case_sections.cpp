@@ -95,8 +95,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
     s.radius = R.number(m, P, "radius", gt(0));
     s.element_size = R.number(m, P, "element_size", between(0, true, s.radius, false));
-    if (g == "sphere") {
-      s.mesher = R.string(m, P, "mesher", std::string("delaunay"));
+    if (g == "sphere" && m.contains("mesher")) {  // not written when absent: same case hash as before
+      s.mesher = R.string(m, P, "mesher");
       if (s.mesher != "delaunay" && s.mesher != "hxt")
         R.fail(child(P, "mesher"), "unknown mesher '" + s.mesher + "' (allowed: delaunay, hxt)");
     }

@@ -175,10 +175,10 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   return summary;
 }
 
-template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<2>&, const HistoryTable<2>&,
-                                    RunFragments<2>*, const RunRecord&);
-template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<3>&, const HistoryTable<3>&,
-                                    RunFragments<3>*, const RunRecord&);
+template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<2>&,
+                                    const HistoryTable<2>&, RunFragments<2>*, const RunRecord&);
+template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<3>&,
+                                    const HistoryTable<3>&, RunFragments<3>*, const RunRecord&);
 
 void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress) {
   if (progress) {
