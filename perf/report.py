@@ -718,11 +718,11 @@ class Report:
                 if r.get("is_reference"):
                     tag.append("reference")
                 rows.append([f"{r['safety_factor']:g}", f"{1000 * r['h_m']:g}", r["elements"], r["steps"],
-                             f"{100 * r['energy_error']:.2f} %", f"{100 * r['max_relative_balance_error']:.2f} %",
+                             f"{100 * r['energy_error_signed']:+.2f} %", f"{100 * r['max_relative_balance_error']:.2f} %",
                              f"{r['fragment_distance']:.3f}", r["fragment_count"], f"{r['largest_fraction']:.3f}",
                              f"{100 * r['fracture_difference']:+.1f} %" if r.get("fracture_difference") is not None else "-",
                              f"{r['wall_seconds']:.0f}", f"{r['element_steps']:.3g}", " ".join(tag)])
-            self.w(table(["S", "h [mm]", "elements", "steps", "energy error", "worst balance", "fragment distance",
+            self.w(table(["S", "h [mm]", "elements", "steps", "balance / E_kin,0", "worst balance", "fragment distance",
                           "fragments", "largest", "fracture vs ref", "wall [s]", "element-steps",
                           "front (E: energy, F: fragments; on element-steps)"], rows))
             self.w()
@@ -741,7 +741,7 @@ class Report:
             fig, axes = plt.subplots(2, 2, figsize=(11, 8.2))
             sizes = sorted({r["h_m"] for r in runs}, reverse=True)
             markers = "osD^v<>p"
-            for col, (err, label) in enumerate((("energy_error", "energy error |balance| / E_kin,0"),
+            for col, (err, label) in enumerate((("energy_error", "balance error / E_kin,0 (signed)"),
                                                 ("fragment_distance", "fragment distance [decades]"))):
                 for row, (cost, clabel) in enumerate((("wall_seconds", "wall time of the run [s]"),
                                                       ("element_steps", "work [element-steps]"))):
@@ -750,7 +750,7 @@ class Report:
                     for i, h in enumerate(sizes):
                         rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
                         ax.loglog([r[cost] for r in rr], [max(r[err], floor) for r in rr], "-" + markers[i % 8],
-                                  ms=5, lw=0.8, label=f"h = {1000 * h:g} mm")
+                                  ms=5, lw=0.8, color=f"C{i}", label=f"h = {1000 * h:g} mm")
                         for r in rr:
                             ax.annotate(f"{r['safety_factor']:g}", (r[cost], max(r[err], floor)), fontsize=6.5,
                                         xytext=(3, 2), textcoords="offset points")
@@ -761,17 +761,46 @@ class Report:
                         if is_dflt(r):
                             ax.loglog([r[cost]], [max(r[err], floor)], "o", mfc="none", mec="r", ms=13,
                                       label="case default")
+                    if err == "energy_error":
+                        # the signed error: an energy loss that does not depend on S (contact) and a
+                        # gain that grows with S add up; symmetric log scale, linear within +-0.1 %
+                        for line in list(ax.get_lines()):
+                            line.remove()
+                        for i, h in enumerate(sizes):
+                            rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
+                            ax.plot([r[cost] for r in rr], [r["energy_error_signed"] for r in rr],
+                                    "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}", label=f"h = {1000 * h:g} mm")
+                        for r in runs:
+                            if is_dflt(r):
+                                ax.plot([r[cost]], [r["energy_error_signed"]], "o", mfc="none", mec="r", ms=13,
+                                        label="case default")
+                        for t in ax.texts:
+                            t.xy = (t.xy[0], next((r["energy_error_signed"] for r in runs if r[cost] == t.xy[0]),
+                                                  t.xy[1]))
+                        ax.set_xscale("log")
+                        ax.set_yscale("symlog", linthresh=1e-3)
+                        ax.axhline(0, color="k", lw=0.5)
+                    else:
+                        tw = [t["fragment_distance"] for t in c.get("twins", [])]
+                        if tw:
+                            ax.axhline(max(tw), color="gray", ls=":", lw=1,
+                                       label="scatter: S = 0.2 against 0.202 (largest)")
                     ax.set_xlabel(clabel)
                     ax.set_ylabel(label)
                     ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
                     ax.grid(True, which="both", alpha=0.3)
-                    if row == 0 and col == 0:
+                    if row == 0:
                         ax.legend(fontsize=7)
             fig.suptitle(f"{c['case']}: error against cost over the safety factor (labels) and element size "
-                         "(errors of 0 drawn at 1e-4)",
+                         "(fragment distances of 0 drawn at 1e-4)",
                          fontsize=10)
             fig.subplots_adjust(bottom=0.11, hspace=0.3, wspace=0.25, top=0.94)
-            self.footer(fig, d["command"], d.get("threads") or "?")
+            cpu = self.meta.get("cpu_model", "?")
+            load_avg = ", ".join(f"{x:.1f}" for x in d.get("load_average", []))
+            fig.text(0.01, 0.005, f"{cpu}, {self.meta.get('cores', '?')} cores; OpenMP, "
+                     f"{d.get('threads') or '?'} thread(s) per run, {d.get('jobs', 1)} runs at once; "
+                     f"{d.get('date_utc', '?')}; load average {load_avg}\n{d['command']}",
+                     fontsize=6.5, va="bottom", ha="left", family="monospace", wrap=True)
             p = self.save(fig, f"perf_timestep_{key}.png")
             self.w(f"![{key.upper()} impact: error against run time]({p})")
             self.w()

@@ -86,7 +86,8 @@ def run_one(fdem, key, case, s, h, out_root, timeout, rerun, extra):
         p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=timeout)
         rc, text = p.returncode, p.stdout
     except subprocess.TimeoutExpired as e:
-        rc, text = 124, (e.stdout or b"").decode(errors="replace") if isinstance(e.stdout, bytes) else (e.stdout or "")
+        so = e.stdout or b""
+        rc, text = 124, so.decode(errors="replace") if isinstance(so, bytes) else so
     rec["exit_status"] = rc
     rec["process_wall_seconds"] = time.time() - t0
     try:
@@ -112,7 +113,8 @@ def run_one(fdem, key, case, s, h, out_root, timeout, rerun, extra):
             "fracture_J": sm["energy"]["fracture_J"], "friction_J": sm["energy"]["friction_J"],
             "interfaces_failed": sm.get("interfaces_failed"),
             "total_mass_kg": mass, "fragment_count": fr.get("count"),
-            "largest_fraction": fr.get("largest_fraction"), "largest_fractions": fr.get("largest_fractions", []),
+            "largest_fraction": fr.get("largest_fraction"),
+            "largest_fractions": fr.get("largest_fractions", []),
             "single_element_fragments": fr.get("single_element_fragments"),
             "bin_mass_fraction": fr.get("distribution", {}).get("mass_fraction", []),
         })
@@ -184,6 +186,7 @@ def measures(runs, ref_choice, speed):
         ke0 = 0.5 * r["total_mass_kg"] * speed ** 2
         r["initial_kinetic_J"] = ke0
         r["energy_error"] = abs(r["balance_error_J"]) / ke0 if ke0 > 0 else None
+        r["energy_error_signed"] = r["balance_error_J"] / ke0 if ke0 > 0 else None
         r["fragment_distance"] = fragment_distance(r, ref)
         r["largest_fraction_difference"] = r["largest_fraction"] - ref["largest_fraction"]
         r["fracture_difference"] = ((r["fracture_J"] - ref["fracture_J"]) / ref["fracture_J"]
@@ -216,12 +219,14 @@ def main():
     ap.add_argument("--out", required=True, help="results folder (timestep.json, timestep_runs/)")
     ap.add_argument("--grid2d", default="0.1,0.2,0.3,0.45,0.6,0.8:0.005,0.0035,0.0025;0.1,0.2,0.3:0.00175")
     ap.add_argument("--grid3d", default="0.1,0.2,0.3,0.45,0.6,0.8:0.006,0.0045;0.1,0.2,0.3:0.003")
-    ap.add_argument("--reference2d", default="", help="S:H of the reference run (default: finest, smallest S)")
+    ap.add_argument("--reference2d", default="",
+                    help="S:H of the reference run (default: finest, smallest S)")
     ap.add_argument("--reference3d", default="")
     ap.add_argument("--jobs", type=int, default=1, help="runs at once")
     ap.add_argument("--timeout", type=float, default=3600, help="seconds per run (then counted as failed)")
     ap.add_argument("--rerun", action="store_true", help="repeat runs that have results already")
-    ap.add_argument("--set", action="append", default=[], help="extra --set for every run (e.g. parameters.speed=20)")
+    ap.add_argument("--set", action="append", default=[],
+                    help="extra --set for every run (e.g. parameters.speed=20)")
     a = ap.parse_args()
     extra = [x for s in a.set for x in ("--set", s)]
     root = os.path.join(a.out, "timestep_runs")
@@ -243,7 +248,8 @@ def main():
             records.append(r)
             msg = (f"{r['elements']} elements, {r['steps']} steps, balance {r['balance_error_J']:+.3g} J, "
                    f"{r['fragment_count']} fragments (largest {r['largest_fraction']:.3f}), "
-                   f"wall {r['wall_seconds']:.0f} s" if "steps" in r else f"FAILED (exit status {r['exit_status']})")
+                   f"wall {r['wall_seconds']:.0f} s" if "steps" in r
+                   else f"FAILED (exit status {r['exit_status']})")
             print(f"timestep_study: {r['case']} S = {r['safety_factor']:g}, h = {1000 * r['h_m']:g} mm: {msg}"
                   f"{' (reused)' if r.get('reused') else ''}", flush=True)
     out = {"command": " ".join([os.path.relpath(sys.argv[0])] + sys.argv[1:]),
