@@ -674,15 +674,16 @@ class Report:
             self.w("(missing: timestep.json, from perf/timestep_study.py)")
             self.w()
             return
+        load_avg = ", ".join(f"{x:.1f}" for x in d.get("load_average", []))
         self.w(f"`{d['command']}` ({d.get('date_utc', '?')}, commit {d.get('commit', '?')}, "
-               f"OMP_NUM_THREADS = {d.get('threads') or '?'}, {d.get('jobs', 1)} runs at once, load average "
-               f"at the end {', '.join(f'{x:.1f}' for x in d.get('load_average', []))}). Each run: `fdem run CASE "
-               "--set time.safety_factor=S --set parameters.h=H --set output.snapshot_count=0`. Errors against "
-               "the case's reference run (its finest size at its smallest factor): energy = |balance error| at "
-               "the end / initial kinetic energy; fragments = the earth mover's distance between the fragment "
-               "mass distributions over log10 of the fragment mass, in decades (0.30: a whole body against "
-               "two halves; perf/timestep_study.py). Cost: wall time (summary.json; the machine is shared, "
-               "so also the work, element-steps = elements x steps).")
+               f"OMP_NUM_THREADS = {d.get('threads') or '?'}, {d.get('jobs', 1)} runs at once, load "
+               f"average at the end {load_avg}). Each run: `fdem run CASE --set time.safety_factor=S "
+               "--set parameters.h=H --set output.snapshot_count=0`. Errors against the case's reference "
+               "run (its finest size at its smallest factor): energy = balance error at the end / initial "
+               "kinetic energy (signed); fragments = the earth mover's distance between the fragment mass "
+               "distributions over log10 of the fragment mass, in decades (0.30: a whole body against two "
+               "halves; perf/timestep_study.py). Cost: wall time (summary.json; the machine is shared, so "
+               "also the work, element-steps = elements x steps).")
         self.w()
 
         def front_of(runs, err, cost):
@@ -717,20 +718,23 @@ class Report:
                     tag.append("default")
                 if r.get("is_reference"):
                     tag.append("reference")
+                frac = r.get("fracture_difference")
                 rows.append([f"{r['safety_factor']:g}", f"{1000 * r['h_m']:g}", r["elements"], r["steps"],
-                             f"{100 * r['energy_error_signed']:+.2f} %", f"{100 * r['max_relative_balance_error']:.2f} %",
-                             f"{r['fragment_distance']:.3f}", r["fragment_count"], f"{r['largest_fraction']:.3f}",
-                             f"{100 * r['fracture_difference']:+.1f} %" if r.get("fracture_difference") is not None else "-",
+                             f"{100 * r['energy_error_signed']:+.2f} %",
+                             f"{100 * r['max_relative_balance_error']:.2f} %",
+                             f"{r['fragment_distance']:.3f}", r["fragment_count"],
+                             f"{r['largest_fraction']:.3f}",
+                             f"{100 * frac:+.1f} %" if frac is not None else "-",
                              f"{r['wall_seconds']:.0f}", f"{r['element_steps']:.3g}", " ".join(tag)])
-            self.w(table(["S", "h [mm]", "elements", "steps", "balance / E_kin,0", "worst balance", "fragment distance",
-                          "fragments", "largest", "fracture vs ref", "wall [s]", "element-steps",
-                          "front (E: energy, F: fragments; on element-steps)"], rows))
+            self.w(table(["S", "h [mm]", "elements", "steps", "balance / E_kin,0", "worst balance",
+                          "fragment distance", "fragments", "largest", "fracture vs ref", "wall [s]",
+                          "element-steps", "front (E: energy, F: fragments; on element-steps)"], rows))
             self.w()
             for t in c.get("twins", []):
                 self.w(f"Scatter of the fragmentation itself: h = {1000 * t['h_m']:g} mm at S = "
                        f"{t['safety_factors'][0]:g} and {t['safety_factors'][1]:g} (the same discretisation, "
-                       f"rounded differently): fragment distance {t['fragment_distance']:.3f}, largest fragment "
-                       f"{t['largest_fractions'][0]:.3f} and {t['largest_fractions'][1]:.3f}, "
+                       f"rounded differently): fragment distance {t['fragment_distance']:.3f}, largest "
+                       f"fragment {t['largest_fractions'][0]:.3f} and {t['largest_fractions'][1]:.3f}, "
                        f"{t['fragment_counts'][0]} and {t['fragment_counts'][1]} fragments, energy error "
                        f"{100 * t['energy_errors'][0]:.2f} and {100 * t['energy_errors'][1]:.2f} %.")
                 self.w()
@@ -749,11 +753,12 @@ class Report:
                     floor = 1e-4
                     for i, h in enumerate(sizes):
                         rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
-                        ax.loglog([r[cost] for r in rr], [max(r[err], floor) for r in rr], "-" + markers[i % 8],
-                                  ms=5, lw=0.8, color=f"C{i}", label=f"h = {1000 * h:g} mm")
+                        ax.loglog([r[cost] for r in rr], [max(r[err], floor) for r in rr],
+                                  "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}",
+                                  label=f"h = {1000 * h:g} mm")
                         for r in rr:
-                            ax.annotate(f"{r['safety_factor']:g}", (r[cost], max(r[err], floor)), fontsize=6.5,
-                                        xytext=(3, 2), textcoords="offset points")
+                            ax.annotate(f"{r['safety_factor']:g}", (r[cost], max(r[err], floor)),
+                                        fontsize=6.5, xytext=(3, 2), textcoords="offset points")
                     fr = front_of(runs, err, cost)
                     ax.loglog([r[cost] for r in fr], [max(r[err], floor) for r in fr], "k--", lw=0.7,
                               label="front")
@@ -769,14 +774,15 @@ class Report:
                         for i, h in enumerate(sizes):
                             rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
                             ax.plot([r[cost] for r in rr], [r["energy_error_signed"] for r in rr],
-                                    "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}", label=f"h = {1000 * h:g} mm")
+                                    "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}",
+                                    label=f"h = {1000 * h:g} mm")
                         for r in runs:
                             if is_dflt(r):
-                                ax.plot([r[cost]], [r["energy_error_signed"]], "o", mfc="none", mec="r", ms=13,
-                                        label="case default")
+                                ax.plot([r[cost]], [r["energy_error_signed"]], "o", mfc="none", mec="r",
+                                        ms=13, label="case default")
                         for t in ax.texts:
-                            t.xy = (t.xy[0], next((r["energy_error_signed"] for r in runs if r[cost] == t.xy[0]),
-                                                  t.xy[1]))
+                            y = next((r["energy_error_signed"] for r in runs if r[cost] == t.xy[0]), t.xy[1])
+                            t.xy = (t.xy[0], y)
                         ax.set_xscale("log")
                         ax.set_yscale("symlog", linthresh=1e-3)
                         ax.axhline(0, color="k", lw=0.5)
