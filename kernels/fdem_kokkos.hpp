@@ -1,6 +1,6 @@
 #pragma once
 // One source for Kokkos 3.4.1 (Debian) and current Kokkos (4.x/5.x), OpenMP and CUDA.
-// See ../shared/guides/kokkos-portability.md for the differences bridged here.
+// What differs between the versions and what each bridge below does: docs/cuda.md, "Porting rules".
 #include <Kokkos_Core.hpp>
 #include <Kokkos_ScatterView.hpp>
 

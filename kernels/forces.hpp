@@ -16,8 +16,9 @@ constexpr int kChunk =
 
 // Work item c of the force pass. fused (host backends): element chunk c and the interfaces whose
 // side A lies in it (Model::ichunk: one pass over the nodes, side A's positions and forces are
-// still in cache); else bulk chunks (c < nbc), then interface chunks.
-template <int D>
+// still in cache); else bulk chunks (c < nbc), then interface chunks. PerIface: the interfaces
+// take their own parameters (InterfaceData::params); else all take InterfaceData::coh.
+template <int D, bool PerIface>
 struct ForceKernel {
   Kokkos::View<double* [D]> x;
   ElementData<D> el;
@@ -49,8 +50,9 @@ struct ForceKernel {
     // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
     // without contact, come apart for good: interface_apart).
     if (in.icontact(q)) return;
+    const CohesiveParams p = PerIface ? in.params(q) : in.coh;
     if (interface_apart<D>(xa, xb, h)) {
-      interface_fail_all<D>(xa, xb, in.iarea(q), in.coh, h);
+      interface_fail_all<D>(xa, xb, in.iarea(q), p, h);
       for (int k = 0; k < D; ++k) store_point(in.ihist, q, k, h[k]);
       if (handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
       else in.icontact(q) = 1;
@@ -58,7 +60,7 @@ struct ForceKernel {
     }
     CohesivePoint h0[D];
     for (int k = 0; k < D; ++k) h0[k] = h[k];
-    const double dmean = interface_forces<D>(xa, xb, in.iarea(q), in.coh, h, fa, fb);
+    const double dmean = interface_forces<D>(xa, xb, in.iarea(q), p, h, fa, fb);
     if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
       Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     for (int k = 0; k < D; ++k) {
@@ -99,8 +101,14 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
   const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
   const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
   sf.reset();
-  const ForceKernel<D> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
-  Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, fused ? nbc : nbc + nic), kernel);
+  const Kokkos::RangePolicy<ExecSpace> policy(0, fused ? nbc : nbc + nic);
+  if (m.per_interface()) {
+    const ForceKernel<D, true> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
+    Kokkos::parallel_for("fdem::forces", policy, kernel);
+  } else {
+    const ForceKernel<D, false> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
+    Kokkos::parallel_for("fdem::forces", policy, kernel);
+  }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;
   Kokkos::Experimental::contribute(f, sf);

@@ -71,6 +71,31 @@ struct InterfaceData {
   // chunk with the interfaces whose side A lies in it. Empty: bulk and interfaces apart.
   Kokkos::View<int*> ichunk;
   CohesiveParams coh{};
+  // Several interface materials or a strength scatter (docs/case-format.md, "fracture"): interface
+  // q takes coh_table(imat(q)) as given, its f_t and c times iscale(q) (and its Gnc, Gsc when
+  // scale_energy), its strengths divided by the strength reduction srf, and coh's rescale.
+  // Empty (extent 0) in a run with one material and no scatter: every interface takes coh, and
+  // the force kernel is the one-material one (no table read, no per-interface index).
+  Kokkos::View<CohesiveParams*> coh_table;
+  Kokkos::View<int*> imat;      // ni, with coh_table
+  Kokkos::View<float*> iscale;  // ni with a scatter, else empty (factor 1)
+  double srf = 1.0;
+  bool scale_energy = false;
+  KOKKOS_INLINE_FUNCTION bool per_interface() const { return coh_table.extent(0) > 0; }
+  KOKKOS_INLINE_FUNCTION CohesiveParams params(const int q) const {
+    if (!per_interface()) return coh;
+    CohesiveParams p = coh_table(imat(q));
+    const double w = iscale.extent(0) > 0 ? static_cast<double>(iscale(q)) : 1.0;
+    p.ft *= w / srf;
+    p.c *= w / srf;
+    p.tanphi /= srf;
+    if (scale_energy) {
+      p.Gnc *= w;
+      p.Gsc *= w;
+    }
+    p.rescale = coh.rescale;
+    return p;
+  }
   // Per interface (extent ni): 1 once it carries nothing and stores nothing, for good: handed over
   // to contact when failed and parted (interface_parted, kernels/interface.hpp), or, without
   // contact, come apart (interface_apart). With contact (contact_handover), the force kernel

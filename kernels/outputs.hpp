@@ -75,7 +75,7 @@ InterfaceSums interface_state(const Model<D>& m) {
           }
           for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
           const double dmg = cohesive_damage(h);
-          if (!handed) s.elastic += ap * cohesive_stored(in.coh, dn, kmath::sqrt(ds2), dmg);
+          if (!handed) s.elastic += ap * cohesive_stored(in.params(q), dn, kmath::sqrt(ds2), dmg);
           s.fracture += ap * cohesive_dissipation(h);
           any = any || dmg > 0.0;
           all = all && dmg >= 1.0;

@@ -361,6 +361,7 @@ json run_skips(double target, const Options& o) {
   damping_variants(sc, vs);
   sampling_variants(sc, vs);
   friction_variants(sc, vs);
+  iface_table_variants(sc, vs);
   std::vector<std::function<void()>> fns;
   for (const auto& v : vs) fns.push_back(v.fn);
   const std::vector<Stat> st = measure(fns, o.reps, o.min_time);

@@ -61,6 +61,9 @@ struct SceneOptions {
   bool fix_face = true;
   double friction = -1;  // contact friction (< 0: derived, tan phi)
   bool contact_step_now = false;  // contact's stable step from the start (the skip forced off)
+  // 1: one interface material (no per-interface table); 2: the same material named again for the
+  // region (every interface through the per-interface table); 3: as 2 with a Weibull scatter.
+  int iface_table = 1;
 };
 
 inline Case make_case(int dim, double h, const SceneOptions& so) {
@@ -75,6 +78,15 @@ inline Case make_case(int dim, double h, const SceneOptions& so) {
   c.interface_materials = {fdem_test::strong_interface(kn, kn / 2.5)};
   c.fracturable_regions = {"body"};
   c.fracture_material = 0;
+  if (so.iface_table >= 2) {
+    c.interface_materials.push_back(c.interface_materials[0]);
+    c.interface_materials[1].name = "if_region";
+    c.region_iface_material = {{"body", 1}};
+  }
+  if (so.iface_table >= 3) {
+    c.scatter.distribution = "weibull";
+    c.scatter.modulus = 5;
+  }
   c.contact.enabled = so.contact;
   c.contact.friction = so.friction;
   if (so.fix_face) {
@@ -237,6 +249,24 @@ void sampling_variants(SkipScenes<D>& sc, std::vector<Variant>& vs) {
   Simulation<D>* a = &sc.make(so);
   vs.push_back({"sampling", "unsampled step", "skip", [a]() { a->step(false); }, a->dt});
   vs.push_back({"sampling", "sampled step", "not applicable", [a]() { a->step(true); }, a->dt});
+}
+
+// interface materials: one material reads no per-interface index or table (the one-material
+// force kernel); the same material through the table, and with a strength scatter
+template <int D>
+void iface_table_variants(SkipScenes<D>& sc, std::vector<Variant>& vs) {
+  SceneOptions one, table, scatter;
+  one.contact = table.contact = scatter.contact = 0;
+  table.iface_table = 2;
+  scatter.iface_table = 3;
+  Simulation<D>* a = &sc.make(one);
+  Simulation<D>* b = &sc.make(table);
+  Simulation<D>* c = &sc.make(scatter);
+  vs.push_back({"iface_table", "one interface material", "skip", [a]() { a->step(false); }, a->dt});
+  vs.push_back({"iface_table", "one material through the per-interface table", "no skip (forced)",
+                [b]() { b->step(false); }, b->dt});
+  vs.push_back({"iface_table", "per-interface table and Weibull scatter", "not applicable",
+                [c]() { c->step(false); }, c->dt});
 }
 
 // friction: a block cracked into single elements, fragments touching each other

@@ -664,6 +664,153 @@ class Report:
         self.w(f"![Brazilian disc: error against wall time]({p})")
         self.w()
 
+    def timestep_section(self):
+        """Issue 19 target 3: the impacts' run time against error over the safety factor and the
+        element size (perf/timestep_study.py writes timestep.json)."""
+        self.w("## 8. Run time against error: the impacts' time step")
+        self.w()
+        d = load(os.path.join(self.res, "timestep.json"))
+        if not d or not d.get("cases"):
+            self.w("(missing: timestep.json, from perf/timestep_study.py)")
+            self.w()
+            return
+        load_avg = ", ".join(f"{x:.1f}" for x in d.get("load_average", []))
+        self.w(f"`{d['command']}` ({d.get('date_utc', '?')}, commit {d.get('commit', '?')}, "
+               f"OMP_NUM_THREADS = {d.get('threads') or '?'}, {d.get('jobs', 1)} runs at once, load "
+               f"average at the end {load_avg}). Each run: `fdem run CASE --set time.safety_factor=S "
+               "--set parameters.h=H --set output.snapshot_count=0`. Errors against the case's reference "
+               "run (its finest size at its smallest factor): energy = balance error at the end / initial "
+               "kinetic energy (signed); fragments = the earth mover's distance between the fragment mass "
+               "distributions over log10 of the fragment mass, in decades (0.30: a whole body against two "
+               "halves; perf/timestep_study.py). Cost: wall time (summary.json; the machine is shared, so "
+               "also the work, element-steps = elements x steps).")
+        self.w()
+
+        def front_of(runs, err, cost):
+            ok = [r for r in runs if r.get(err) is not None]
+            f = [r for r in ok if not any(o is not r and o[err] <= r[err] and o[cost] <= r[cost] and
+                                          (o[err] < r[err] or o[cost] < r[cost]) for o in ok)]
+            return sorted(f, key=lambda r: r[cost])
+
+        for key in sorted(d["cases"]):
+            c = d["cases"][key]
+            runs = [r for r in c["runs"] if r.get("exit_status") == 0 and "steps" in r]
+            bad = [r for r in c["runs"] if r.get("exit_status") != 0]
+            dflt = c["default"]
+            ref = c.get("reference") or {}
+            is_dflt = (lambda r: abs(r["safety_factor"] - dflt["safety_factor"]) < 1e-9 and
+                       abs(r["h_m"] - dflt["h"]) < 1e-9)
+            self.w(f"### {key.upper()}: `{c['case']}` at {c['speed_m_per_s']:g} m/s")
+            self.w()
+            self.w(f"Case default: S = {dflt['safety_factor']:g}, h = {1000 * dflt['h']:g} mm. Reference: "
+                   f"S = {ref.get('safety_factor', '?')}, h = {1000 * ref.get('h_m', float('nan')):g} mm.")
+            self.w()
+            fe = front_of(runs, "energy_error", "element_steps")
+            ff = front_of(runs, "fragment_distance", "element_steps")
+            rows = []
+            for r in sorted(runs, key=lambda r: (-r["h_m"], r["safety_factor"])):
+                tag = []
+                if r in fe:
+                    tag.append("E")
+                if r in ff:
+                    tag.append("F")
+                if is_dflt(r):
+                    tag.append("default")
+                if r.get("is_reference"):
+                    tag.append("reference")
+                frac = r.get("fracture_difference")
+                rows.append([f"{r['safety_factor']:g}", f"{1000 * r['h_m']:g}", r["elements"], r["steps"],
+                             f"{100 * r['energy_error_signed']:+.2f} %",
+                             f"{100 * r['max_relative_balance_error']:.2f} %",
+                             f"{r['fragment_distance']:.3f}", r["fragment_count"],
+                             f"{r['largest_fraction']:.3f}",
+                             f"{100 * frac:+.1f} %" if frac is not None else "-",
+                             f"{r['wall_seconds']:.0f}", f"{r['element_steps']:.3g}", " ".join(tag)])
+            self.w(table(["S", "h [mm]", "elements", "steps", "balance / E_kin,0", "worst balance",
+                          "fragment distance", "fragments", "largest", "fracture vs ref", "wall [s]",
+                          "element-steps", "front (E: energy, F: fragments; on element-steps)"], rows))
+            self.w()
+            for t in c.get("twins", []):
+                self.w(f"Scatter of the fragmentation itself: h = {1000 * t['h_m']:g} mm at S = "
+                       f"{t['safety_factors'][0]:g} and {t['safety_factors'][1]:g} (the same discretisation, "
+                       f"rounded differently): fragment distance {t['fragment_distance']:.3f}, largest "
+                       f"fragment {t['largest_fractions'][0]:.3f} and {t['largest_fractions'][1]:.3f}, "
+                       f"{t['fragment_counts'][0]} and {t['fragment_counts'][1]} fragments, energy error "
+                       f"{100 * t['energy_errors'][0]:.2f} and {100 * t['energy_errors'][1]:.2f} %.")
+                self.w()
+            for r in bad:
+                self.w(f"Failed: S = {r['safety_factor']:g}, h = {1000 * r['h_m']:g} mm (exit status "
+                       f"{r['exit_status']}): {((r.get('failure') or '').strip().splitlines() or [''])[-1]}")
+                self.w()
+            fig, axes = plt.subplots(2, 2, figsize=(11, 8.2))
+            sizes = sorted({r["h_m"] for r in runs}, reverse=True)
+            markers = "osD^v<>p"
+            for col, (err, label) in enumerate((("energy_error", "balance error / E_kin,0 (signed)"),
+                                                ("fragment_distance", "fragment distance [decades]"))):
+                for row, (cost, clabel) in enumerate((("wall_seconds", "wall time of the run [s]"),
+                                                      ("element_steps", "work [element-steps]"))):
+                    ax = axes[row][col]
+                    floor = 1e-4
+                    for i, h in enumerate(sizes):
+                        rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
+                        ax.loglog([r[cost] for r in rr], [max(r[err], floor) for r in rr],
+                                  "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}",
+                                  label=f"h = {1000 * h:g} mm")
+                        for r in rr:
+                            ax.annotate(f"{r['safety_factor']:g}", (r[cost], max(r[err], floor)),
+                                        fontsize=6.5, xytext=(3, 2), textcoords="offset points")
+                    fr = front_of(runs, err, cost)
+                    ax.loglog([r[cost] for r in fr], [max(r[err], floor) for r in fr], "k--", lw=0.7,
+                              label="front")
+                    for r in runs:
+                        if is_dflt(r):
+                            ax.loglog([r[cost]], [max(r[err], floor)], "o", mfc="none", mec="r", ms=13,
+                                      label="case default")
+                    if err == "energy_error":
+                        # the signed error: an energy loss that does not depend on S (contact) and a
+                        # gain that grows with S add up; symmetric log scale, linear within +-0.1 %
+                        for line in list(ax.get_lines()):
+                            line.remove()
+                        for i, h in enumerate(sizes):
+                            rr = sorted([r for r in runs if r["h_m"] == h], key=lambda r: r["safety_factor"])
+                            ax.plot([r[cost] for r in rr], [r["energy_error_signed"] for r in rr],
+                                    "-" + markers[i % 8], ms=5, lw=0.8, color=f"C{i}",
+                                    label=f"h = {1000 * h:g} mm")
+                        for r in runs:
+                            if is_dflt(r):
+                                ax.plot([r[cost]], [r["energy_error_signed"]], "o", mfc="none", mec="r",
+                                        ms=13, label="case default")
+                        for t in ax.texts:
+                            y = next((r["energy_error_signed"] for r in runs if r[cost] == t.xy[0]), t.xy[1])
+                            t.xy = (t.xy[0], y)
+                        ax.set_xscale("log")
+                        ax.set_yscale("symlog", linthresh=1e-3)
+                        ax.axhline(0, color="k", lw=0.5)
+                    else:
+                        tw = [t["fragment_distance"] for t in c.get("twins", [])]
+                        if tw:
+                            ax.axhline(max(tw), color="gray", ls=":", lw=1,
+                                       label="scatter: S = 0.2 against 0.202 (largest)")
+                    ax.set_xlabel(clabel)
+                    ax.set_ylabel(label)
+                    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+                    ax.grid(True, which="both", alpha=0.3)
+                    if row == 0:
+                        ax.legend(fontsize=7)
+            fig.suptitle(f"{c['case']}: error against cost over the safety factor (labels) and element size "
+                         "(fragment distances of 0 drawn at 1e-4)",
+                         fontsize=10)
+            fig.subplots_adjust(bottom=0.11, hspace=0.3, wspace=0.25, top=0.94)
+            cpu = self.meta.get("cpu_model", "?")
+            load_avg = ", ".join(f"{x:.1f}" for x in d.get("load_average", []))
+            fig.text(0.01, 0.005, f"{cpu}, {self.meta.get('cores', '?')} cores; OpenMP, "
+                     f"{d.get('threads') or '?'} thread(s) per run, {d.get('jobs', 1)} runs at once; "
+                     f"{d.get('date_utc', '?')}; load average {load_avg}\n{d['command']}",
+                     fontsize=6.5, va="bottom", ha="left", family="monospace", wrap=True)
+            p = self.save(fig, f"perf_timestep_{key}.png")
+            self.w(f"![{key.upper()} impact: error against run time]({p})")
+            self.w()
+
     def summary(self):
         self.w("## Checks")
         self.w()
@@ -684,6 +831,7 @@ class Report:
         self.contact()
         self.wave_section()
         self.brazil_section()
+        self.timestep_section()
         body = self.lines[body_start:]
         self.lines = self.lines[:body_start]
         self.summary()

@@ -706,6 +706,33 @@ TEST(CaseParameters, Expressions) {
   EXPECT_HAS(error_of(e), "parameters.rate: expected a number");
 }
 
+TEST(CaseParameters, ExpressionFunctions) {
+  json d = base_doc();
+  d["parameters"] = {{"E", 30e9}, {"rho", 2500}, {"r", 0.05}};
+  d["time"]["end_time"] = "=sqrt(E / rho) * 1e-6";
+  d["platens"][0]["point"] = {"=r * cos(pi / 3)", "=max(r, 0.02) + pow(2, -3) * abs(-0.08)"};
+  d["interface_materials"]["cif"]["phi_deg"] = "=atan2(1, 1) * 180 / pi + min(log(exp(2)), log10(1000))";
+  Case c = fdem::parse_case(d, "test.json");
+  EXPECT_NEAR(c.end_time, std::sqrt(30e9 / 2500) * 1e-6, 1e-15);
+  EXPECT_NEAR(c.platens[0].point[0], 0.025, 1e-15);
+  EXPECT_NEAR(c.platens[0].point[1], 0.05 + 0.01, 1e-15);
+  EXPECT_NEAR(c.interface_materials[0].phi, (45.0 + 2.0) * kPi / 180, 1e-12);
+
+  json e = d;
+  e["time"]["end_time"] = "=sqrt(-E)";
+  std::string msg = error_of(e);
+  EXPECT_HAS(msg, "time.end_time");
+  EXPECT_HAS(msg, "sqrt is not defined there");
+  e["time"]["end_time"] = "=sqr(E)";
+  EXPECT_HAS(error_of(e), "unknown function 'sqr'; did you mean 'sqrt'?");
+  e["time"]["end_time"] = "=pow(E)";
+  EXPECT_HAS(error_of(e), "pow takes two arguments (got 1)");
+  e["time"]["end_time"] = "=sin(1, 2)";
+  EXPECT_HAS(error_of(e), "sin takes one argument (got 2)");
+  e["time"]["end_time"] = "=sqrt(E";
+  EXPECT_HAS(error_of(e), "missing ')' after the arguments of sqrt");
+}
+
 // ---------------------------------------------------------------------------------------------
 
 fdem::HostMesh tiny_mesh(std::vector<std::string> regions, std::vector<std::string> sets) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "test_files.hpp"
 
 namespace {
 
@@ -25,12 +26,7 @@ int run(const std::string& cmd) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
 template <class T>
 std::vector<T> read_dataset(hid_t file, const std::string& name, hid_t type, std::vector<hsize_t>& dims) {

@@ -27,6 +27,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "test_files.hpp"
 
 namespace {
 
@@ -38,27 +39,11 @@ const std::string kSets =
     " --set parameters.closure=1.2e-3";
 constexpr double kEvery = 2e-4;  // checkpoints at 0.2, 0.4, ... ms
 
-// Exit status of a shell command; 128 + signal when it was killed.
-int sh(const std::string& cmd) {
-  const int rc = std::system(cmd.c_str());
-  if (WIFEXITED(rc)) {
-    return WEXITSTATUS(rc);
-  }
-  return WIFSIGNALED(rc) ? 128 + WTERMSIG(rc) : -1;
-}
+int sh(const std::string& cmd) { return fdem::test::system_status(cmd); }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
-std::string tmpdir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("fdem_ckpt_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d.string();
-}
+std::string tmpdir(const std::string& name) { return fdem::test::scratch_dir("ckpt", name); }
 
 const std::string kUniaxial = std::string(FDEM_SOURCE_DIR) + "/cases/uniaxial_compression/case.json";
 const std::string kUniaxialSets =

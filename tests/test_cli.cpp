@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "test_files.hpp"
 
 namespace {
 
@@ -24,18 +25,9 @@ int run(const std::string& cmd) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
-std::string tmpdir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("fdem_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d.string();
-}
+std::string tmpdir(const std::string& name) { return fdem::test::scratch_dir("cli", name); }
 
 const std::string kBar = std::string(FDEM_TEST_DATA) + "/cases/bar.json";
 

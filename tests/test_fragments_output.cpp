@@ -19,6 +19,7 @@
 #include "io/case.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/run.hpp"
+#include "test_files.hpp"
 
 namespace {
 
@@ -27,12 +28,7 @@ namespace fs = std::filesystem;
 
 const std::string kCases = std::string(FDEM_SOURCE_DIR) + "/cases/";
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
 std::vector<std::vector<std::string>> read_csv(const std::string& path) {
   std::vector<std::vector<std::string>> rows;

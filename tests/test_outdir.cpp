@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "io/output.hpp"
+#include "test_files.hpp"
 
 namespace {
 
@@ -32,18 +33,9 @@ namespace fs = std::filesystem;
 const std::string kBar = std::string(FDEM_TEST_DATA) + "/cases/bar.json";
 const std::string kEnv = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
-std::string tmpdir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("fdem_outdir_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d.string();
-}
+std::string tmpdir(const std::string& name) { return fdem::test::scratch_dir("outdir", name); }
 
 // Exit status of `sh -c cmd`; -(signal) when a signal ended it. file_limit > 0: the command runs
 // with RLIMIT_FSIZE = file_limit bytes and SIGXFSZ ignored, so that a write past the limit fails

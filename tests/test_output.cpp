@@ -16,6 +16,7 @@
 #include "common/error.hpp"
 #include "io/output.hpp"
 #include "mesh/mesh.hpp"
+#include "test_files.hpp"
 
 namespace fs = std::filesystem;
 using fdem::HostMesh;
@@ -29,12 +30,7 @@ std::string fresh_dir(const std::string& name) {
   return d.string();
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using fdem::test::slurp;
 
 // Two triangles sharing the edge (1,2) that has been split: 6 nodes, 1 interface.
 //   element 0: nodes 0,1,2   element 1: nodes 3,5,4 (copies 4 of 1 and 5 of 2, node 3 at (1,1))

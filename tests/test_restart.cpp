@@ -24,6 +24,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "test_files.hpp"
 
 namespace {
 
@@ -37,18 +38,9 @@ int status_of(int rc) {
   return WIFSIGNALED(rc) ? 128 + WTERMSIG(rc) : -1;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
-std::string tmpdir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / ("fdem_restart_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d.string();
-}
+std::string tmpdir(const std::string& name) { return fdem::test::scratch_dir("restart", name); }
 
 // The shell command of a one-thread run of the case into `out` (log: out.log).
 std::string run_cmd(const std::string& out, const std::string& extra, const std::string& env = "") {

@@ -20,6 +20,7 @@
 #include "solver/history_table.hpp"
 #include "solver/simulation.hpp"
 #include "solver_fixtures.hpp"
+#include "test_files.hpp"
 
 namespace {
 
@@ -30,12 +31,7 @@ int run(const std::string& cmd) {
   return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
+using fdem::test::slurp;
 
 // The uniaxial compression case at d = 10 mm and ten times the rate (10 000 steps, about a second
 // on one thread), with `rows` history rows.

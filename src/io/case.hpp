@@ -3,6 +3,7 @@
 // All quantities in SI units; angles are given in degrees in the file and stored in radians.
 #include <array>
 #include <map>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,19 @@ struct InterfaceMaterial {
   double phi = 0;           // rad (file: phi_deg)
   double Gnc = 0, Gsc = 0;  // N/m
   double eta = 2.0;         // Benzeggagh-Kenane exponent
+};
+
+// Random strength of the interfaces (docs/case-format.md, "fracture.scatter"): interface q's
+// f_t and c (strength) and, if `energy`, its Gnc and Gsc are its material's times a factor w_q
+// drawn once per interface from the distribution, mean 1: "weibull" (modulus m) or "normal"
+// (coefficient of variation cov, truncated to [lower, upper], then rescaled to mean 1).
+struct StrengthScatter {
+  std::string distribution;  // "" (none), "weibull" or "normal"
+  double modulus = 0;        // weibull
+  double cov = 0;            // normal
+  double lower = 0.1, upper = 10;  // normal: truncation of w before the mean is restored
+  unsigned long long seed = 1;
+  bool energy = false;  // scale the fracture energies with the strength
 };
 
 // Fixed or prescribed-velocity components of a node set. Fixed is velocity 0.
@@ -83,6 +97,13 @@ struct Case {
   std::vector<InterfaceMaterial> interface_materials;
   std::vector<std::string> fracturable_regions;  // region names that get interfaces
   int fracture_material = -1;                    // index into interface_materials
+  // Interface materials by place (docs/case-format.md, "fracture"): an interface with both sides
+  // in region R takes region_iface_material[R]; one between regions R1 and R2 takes the material
+  // of that pair (pair_iface_material, keys ordered R1 < R2; it wins over the region rule); the
+  // rest take fracture_material. Indices into interface_materials.
+  std::map<std::string, int> region_iface_material;
+  std::map<std::pair<std::string, std::string>, int> pair_iface_material;
+  StrengthScatter scatter;
   // Strength reduction of the interfaces (slope stability): f_t, c and tan(phi) are divided by
   // SRF(t) = srf_initial for t < srf_start, srf_initial + srf_rate (t - srf_start) after.
   double srf_initial = 1.0, srf_start = 0.0, srf_rate = 0.0;

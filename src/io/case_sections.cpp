@@ -104,10 +104,82 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   s.region = R.name(m, P, "region", std::string("body"));
 }
 
+// The interface material named at `p` (an index into interface_materials).
+int interface_material_ref(const json& v, const std::string& p, const Reader& R,
+                           const std::vector<std::string>& names) {
+  const std::string im = R.string_value(v, p);
+  const auto it = std::find(names.begin(), names.end(), im);
+  if (it == names.end())
+    R.fail(p, "unknown interface material '" + im + "'" + did_you_mean(im, names) +
+                  " (interface_materials: " + quoted_list(names) + ")");
+  return static_cast<int>(it - names.begin());
+}
+
+// A region named at `p` that has a bulk material.
+std::string region_ref(const std::string& r, const std::string& p, const Case& c, const Reader& R) {
+  if (c.region_material.count(r)) return r;
+  std::vector<std::string> known;
+  for (const auto& kv : c.region_material) known.push_back(kv.first);
+  R.fail(p, "region '" + r + "' has no material in 'regions'" + did_you_mean(r, known) +
+                " (regions: " + quoted_list(known) + ")");
+}
+
+// "fracture.region_materials": {region: interface material}; "fracture.pair_materials":
+// [{"regions": [r1, r2], "material": m}, ...].
+void read_materials_by_place(json& f, Case& c, const Reader& R, const std::vector<std::string>& names) {
+  json& rm = R.object(f, "fracture", "region_materials", false);
+  for (auto it = rm.begin(); it != rm.end(); ++it) {
+    const std::string p = child("fracture.region_materials", it.key());
+    c.region_iface_material[region_ref(it.key(), p, c, R)] = interface_material_ref(*it, p, R, names);
+  }
+  json& pm = R.array(f, "fracture", "pair_materials", false);
+  for (size_t i = 0; i < pm.size(); ++i) {
+    const std::string p = child("fracture.pair_materials", i);
+    R.require_object(pm[i], p);
+    R.keys(pm[i], p, {"regions", "material"});
+    json& rs = R.array(pm[i], p, "regions", true);
+    if (rs.size() != 2) R.fail(p + ".regions", "two region names are needed (got " + std::to_string(rs.size()) + ")");
+    std::string a = region_ref(R.string_value(rs[0], child(p + ".regions", 0)), child(p + ".regions", 0), c, R);
+    std::string b = region_ref(R.string_value(rs[1], child(p + ".regions", 1)), child(p + ".regions", 1), c, R);
+    if (a == b) R.fail(p + ".regions", "the two regions are the same ('" + a + "'): use fracture.region_materials");
+    if (b < a) std::swap(a, b);
+    if (!pm[i].contains("material")) R.fail(p + ".material", "missing (an interface material name)");
+    const auto key = std::make_pair(a, b);
+    if (c.pair_iface_material.count(key)) R.fail(p, "the pair ('" + a + "', '" + b + "') is listed twice");
+    c.pair_iface_material[key] = interface_material_ref(pm[i]["material"], p + ".material", R, names);
+  }
+}
+
+// "fracture.scatter": random strength per interface.
+void read_scatter(json& f, Case& c, const Reader& R) {
+  json& s = R.object(f, "fracture", "scatter", false);
+  const std::string p = "fracture.scatter";
+  R.keys(s, p, {"distribution", "modulus", "cov", "lower", "upper", "seed", "energy"});
+  StrengthScatter& sc = c.scatter;
+  sc.distribution = R.string(s, p, "distribution");
+  if (sc.distribution == "weibull") {
+    sc.modulus = R.number(s, p, "modulus", between(0.5, false, 1000, false));
+    if (s.contains("cov")) R.fail(p + ".cov", "is for the normal distribution (weibull takes 'modulus')");
+  } else if (sc.distribution == "normal") {
+    sc.cov = R.number(s, p, "cov", between(0, true, 1, false));
+    sc.lower = R.number(s, p, "lower", between(0, true, 1, true), 0.1);
+    sc.upper = R.number(s, p, "upper", gt(1), 10.0);
+    if (s.contains("modulus")) R.fail(p + ".modulus", "is for the weibull distribution (normal takes 'cov')");
+  } else {
+    R.fail(p + ".distribution", "must be \"weibull\" or \"normal\" (got \"" + sc.distribution + "\")");
+  }
+  sc.seed = static_cast<unsigned long long>(R.integer(s, p, "seed", 0, 4294967295L, 1));
+  if (s.contains("energy")) {
+    if (!s["energy"].is_boolean()) R.fail(p + ".energy", "must be true or false");
+    sc.energy = s["energy"].get<bool>();
+  }
+}
+
 // "fracture": the fracturable regions, their interface material and the strength reduction.
 void read_fracture(json& doc, Case& c, const Reader& R) {
   json& f = R.object(doc, "", "fracture", false);
-  R.keys(f, "fracture", {"regions", "interface_material", "strength_reduction"});
+  R.keys(f, "fracture",
+         {"regions", "interface_material", "strength_reduction", "region_materials", "pair_materials", "scatter"});
   if (f.contains("strength_reduction")) {
     json& sr = R.object(f, "fracture", "strength_reduction", false);
     const std::string sp = "fracture.strength_reduction";
@@ -141,6 +213,8 @@ void read_fracture(json& doc, Case& c, const Reader& R) {
            "unknown interface material '" + im + "'" + did_you_mean(im, names) +
                " (interface_materials: " + quoted_list(names) + ")");
   c.fracture_material = static_cast<int>(it - names.begin());
+  read_materials_by_place(f, c, R, names);
+  if (f.contains("scatter")) read_scatter(f, c, R);
 }
 
 }  // namespace

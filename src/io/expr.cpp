@@ -1,11 +1,13 @@
 // Expressions of a case file: a recursive-descent evaluator over numbers, parameters, pi,
-// + - * / and parentheses.
+// + - * /, parentheses and the functions of `call` (sqrt, sin, min, pow, ...).
 #include "io/expr.hpp"
 
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <map>
+#include <string>
 #include <vector>
 
 namespace fdem::case_detail {
@@ -33,7 +35,7 @@ class Expr {
     const std::string shown = s_.size() > 80 ? s_.substr(0, 77) + "..." : s_;
     R_.fail(path_, "expression '" + shown + "': " + why + " (expressions use numbers, parameters (" +
                        (names.empty() ? std::string("none defined") : join(names)) +
-                       "), pi, + - * / and parentheses)");
+                       "), pi, + - * /, parentheses and the functions " + functions() + ")");
   }
   void skip() {
     while (pos_ < s_.size() && std::isspace(static_cast<unsigned char>(s_[pos_]))) ++pos_;
@@ -109,6 +111,8 @@ class Expr {
              (std::isalnum(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '_'))
         ++pos_;
       std::string name = s_.substr(start, pos_ - start);
+      skip();
+      if (pos_ < s_.size() && s_[pos_] == '(') return call(name);
       auto it = params_.find(name);
       if (it != params_.end()) return it->second;
       if (name == "pi") return kPi;
@@ -117,6 +121,55 @@ class Expr {
       error("unknown parameter '" + name + "'" + did_you_mean(name, names));
     }
     error("unexpected '" + std::string(1, ch) + "'");
+  }
+
+  static std::string functions() {
+    return "sqrt, abs, exp, log, log10, sin, cos, tan, asin, acos, atan (one argument; angles in "
+           "radians), atan2, pow, min, max (two)";
+  }
+  // name(args...) at '(': one of the functions above, its arguments separated by commas.
+  double call(const std::string& name) {
+    ++pos_;  // '('
+    Nest nest(*this);
+    std::vector<double> a;
+    while (true) {
+      a.push_back(sum());
+      skip();
+      if (pos_ < s_.size() && s_[pos_] == ',') {
+        ++pos_;
+        continue;
+      }
+      if (pos_ >= s_.size() || s_[pos_] != ')') error("missing ')' after the arguments of " + name);
+      ++pos_;
+      break;
+    }
+    static const std::map<std::string, double (*)(double)> one = {
+        {"sqrt", [](double x) { return std::sqrt(x); }},   {"abs", [](double x) { return std::fabs(x); }},
+        {"exp", [](double x) { return std::exp(x); }},     {"log", [](double x) { return std::log(x); }},
+        {"log10", [](double x) { return std::log10(x); }}, {"sin", [](double x) { return std::sin(x); }},
+        {"cos", [](double x) { return std::cos(x); }},     {"tan", [](double x) { return std::tan(x); }},
+        {"asin", [](double x) { return std::asin(x); }},   {"acos", [](double x) { return std::acos(x); }},
+        {"atan", [](double x) { return std::atan(x); }}};
+    static const std::map<std::string, double (*)(double, double)> two = {
+        {"atan2", [](double y, double x) { return std::atan2(y, x); }},
+        {"pow", [](double x, double y) { return std::pow(x, y); }},
+        {"min", [](double x, double y) { return std::min(x, y); }},
+        {"max", [](double x, double y) { return std::max(x, y); }}};
+    double v;
+    if (one.count(name)) {
+      if (a.size() != 1) error(name + " takes one argument (got " + std::to_string(a.size()) + ")");
+      v = one.at(name)(a[0]);
+    } else if (two.count(name)) {
+      if (a.size() != 2) error(name + " takes two arguments (got " + std::to_string(a.size()) + ")");
+      v = two.at(name)(a[0], a[1]);
+    } else {
+      std::vector<std::string> names;
+      for (const auto& kv : one) names.push_back(kv.first);
+      for (const auto& kv : two) names.push_back(kv.first);
+      error("unknown function '" + name + "'" + did_you_mean(name, names));
+    }
+    if (!std::isfinite(v)) error(name + " is not defined there (the result is not a finite number)");
+    return v;
   }
 
   const std::string& s_;

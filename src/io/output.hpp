@@ -113,6 +113,12 @@ class SnapshotWriter {
   SnapshotWriter(const SnapshotWriter&) = delete;
   SnapshotWriter& operator=(const SnapshotWriter&) = delete;
   void write(const SnapshotFrame& frame);
+  // Static per-interface fields of a run with interface materials by place or a strength scatter
+  // (docs/case-format.md, "fracture"): /mesh/interface_material (index into `names`, written as
+  // /mesh/interface_material_names) and, if not empty, /mesh/strength_factor; shown on the
+  // "interfaces" grid of every frame. Kept when the file already has them (restart).
+  void add_interface_fields(const std::vector<std::string>& names, const std::vector<int>& material,
+                            const std::vector<float>& strength);
   int frames() const { return static_cast<int>(times_.size()); }
   const std::vector<long>& steps() const { return steps_; }
   const std::vector<double>& times() const { return times_; }

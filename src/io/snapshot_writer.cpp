@@ -7,6 +7,10 @@
 //   /mesh/region_names         fixed-length strings, one per region (absent if the mesh has none)
 //   /mesh/interfaces           int32, ni x dim   (A-side node ids of each interface)
 //   /mesh/reference_coordinates nn x 3 (z = 0 in 2D)
+//   /mesh/interface_material   int32, ni: index into interface_material_names (only with
+//                              interface materials by place or a strength scatter)
+//   /mesh/interface_material_names  fixed-length strings (with interface_material)
+//   /mesh/strength_factor      ni (only with a strength scatter)
 //   /step_NNNNNNNN             attributes: time (float64), step (int64)
 //     coordinates, displacement, velocity   nn x 3 (z = 0 in 2D)
 //     stress                   ne x 6 (xx, yy, zz, xy, yz, xz)
@@ -152,17 +156,18 @@ hid_t create_file(const std::string& path) {
   return file;
 }
 
-// /mesh/region_names: fixed-length NUL-terminated strings as long as the longest name.
-void write_region_names(hid_t mesh_g, const std::vector<std::string>& names,
-                        const std::string& path) {
+// /mesh/<dataset> (region_names, interface_material_names): fixed-length NUL-terminated strings
+// as long as the longest name.
+void write_names(hid_t mesh_g, const std::vector<std::string>& names, const std::string& path,
+                 const std::string& dataset = "region_names") {
   size_t len = 1;
   for (const auto& s : names) len = std::max(len, s.size() + 1);
   std::vector<char> buf(len * names.size(), '\0');
   for (size_t r = 0; r < names.size(); ++r) std::memcpy(&buf[r * len], names[r].data(), names[r].size());
   Id st(H5Tcopy(H5T_C_S1), H5Tclose);
   if (!st.ok() || H5Tset_size(st.get(), len) < 0 || H5Tset_strpad(st.get(), H5T_STR_NULLTERM) < 0)
-    h5::fail(path, "cannot create string type for '/mesh/region_names'");
-  h5::write_dataset(mesh_g, "region_names", st.get(), st.get(),
+    h5::fail(path, "cannot create string type for '/mesh/" + dataset + "'");
+  h5::write_dataset(mesh_g, dataset, st.get(), st.get(),
                     {static_cast<hsize_t>(names.size())}, buf.data(), path);
 }
 
@@ -187,7 +192,7 @@ void write_mesh_group(hid_t file, const HostMesh& mesh, const MeshSizes& m, cons
   if (mesh.elem_region.size() == region.size()) region = mesh.elem_region;
   write_ints(g, "region", {static_cast<hsize_t>(m.ne)}, region.data(), path);
 
-  if (!mesh.region_names.empty()) write_region_names(g, mesh.region_names, path);
+  if (!mesh.region_names.empty()) write_names(g, mesh.region_names, path);
 
   std::vector<int> itopo(static_cast<size_t>(m.ni) * m.dim);
   for (int i = 0; i < m.ni; ++i)
@@ -296,6 +301,27 @@ void SnapshotWriter::create(const HostMesh& mesh) {
 
 SnapshotWriter::~SnapshotWriter() {
   if (file_ >= 0) H5Fclose(static_cast<hid_t>(file_));
+}
+
+void SnapshotWriter::add_interface_fields(const std::vector<std::string>& names, const std::vector<int>& material,
+                                          const std::vector<float>& strength) {
+  const std::string path = (fs::path(dir_) / kH5Name).string();
+  const hid_t file = static_cast<hid_t>(file_);
+  if (file_ < 0) throw std::logic_error("SnapshotWriter::add_interface_fields: file is not open");
+  if (material.size() != static_cast<size_t>(ni_) || (!strength.empty() && strength.size() != material.size()))
+    throw std::logic_error("SnapshotWriter::add_interface_fields: one value per interface is needed");
+  if (H5Lexists(file, "/mesh/interface_material", H5P_DEFAULT) > 0) return;  // restart: written
+  Id g(H5Gopen2(file, "/mesh", H5P_DEFAULT), H5Gclose);
+  if (!g.ok()) h5::fail(path, "cannot open group '/mesh'");
+  const hsize_t n = static_cast<hsize_t>(ni_);
+  write_ints(g.get(), "interface_material", {n}, material.data(), path);
+  write_names(g.get(), names, path, "interface_material_names");
+  if (!strength.empty()) {
+    const std::vector<double> w(strength.begin(), strength.end());
+    write_doubles(g.get(), "strength_factor", {n}, w.data(), path);
+  }
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush");
+  write_xdmf();
 }
 
 void SnapshotWriter::write(const SnapshotFrame& fr) {

@@ -49,6 +49,7 @@ struct Frame {
   std::string t;     // its time
   std::string geom;  // its Geometry element (the current coordinates)
   bool frag;         // whether it has a fragment field
+  bool imat, istrength;  // whether the file has /mesh/interface_material, /mesh/strength_factor
 };
 
 // The grid "bulk": triangles/tetrahedra with the node and cell fields.
@@ -84,8 +85,10 @@ void interface_grid(std::ostringstream& o, const Frame& f) {
   o << "            " << item(f.ni + " " + std::to_string(f.dim), true, "/mesh/interfaces")
     << "\n"
     << "          </Topology>\n"
-    << f.geom << attr("damage", "Scalar", "Cell", f.ni, false, f.g + "/damage")
-    << "        </Grid>\n";
+    << f.geom << attr("damage", "Scalar", "Cell", f.ni, false, f.g + "/damage");
+  if (f.imat) o << attr("interface_material", "Scalar", "Cell", f.ni, true, "/mesh/interface_material");
+  if (f.istrength) o << attr("strength_factor", "Scalar", "Cell", f.ni, false, "/mesh/strength_factor");
+  o << "        </Grid>\n";
 }
 
 }  // namespace
@@ -98,6 +101,8 @@ void SnapshotWriter::write_xdmf() const {
   fr.ne = std::to_string(ne_);
   fr.ni = std::to_string(ni_);
   fr.npe = std::to_string(dim_ + 1);
+  fr.imat = H5Lexists(file, "/mesh/interface_material", H5P_DEFAULT) > 0;
+  fr.istrength = H5Lexists(file, "/mesh/strength_factor", H5P_DEFAULT) > 0;
 
   std::ostringstream o;
   o << "<?xml version=\"1.0\" ?>\n"

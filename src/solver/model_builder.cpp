@@ -10,6 +10,7 @@
 #include "common/setup_times.hpp"
 #include "kernels/host_loops.hpp"
 #include "kernels/interface.hpp"
+#include "solver/interface_materials.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
@@ -192,6 +193,29 @@ CohesiveParams cohesive_params(const InterfaceMaterial& im) {
   return CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta};
 }
 
+// The per-interface material table, index and strength factors (InterfaceData::params); nothing
+// for a run with one interface material and no scatter.
+template <int D>
+void upload_interface_materials(const Case& c, const InterfaceMaterialMap& map, Model<D>& m) {
+  if (map.material.empty()) return;
+  const int nm = static_cast<int>(c.interface_materials.size());
+  m.coh_table = Kokkos::View<CohesiveParams*>("fdem::coh_table", nm);
+  auto t_h = mirror(m.coh_table);
+  for (int k = 0; k < nm; ++k) t_h(k) = cohesive_params(c.interface_materials[k]);
+  Kokkos::deep_copy(m.coh_table, t_h);
+  m.imat = Kokkos::View<int*>("fdem::imat", map.material.size());
+  auto im_h = mirror(m.imat);
+  for (size_t q = 0; q < map.material.size(); ++q) im_h(q) = map.material[q];
+  Kokkos::deep_copy(m.imat, im_h);
+  if (!map.scale.empty()) {
+    m.iscale = Kokkos::View<float*>("fdem::iscale", map.scale.size());
+    auto s_h = mirror(m.iscale);
+    for (size_t q = 0; q < map.scale.size(); ++q) s_h(q) = map.scale[q];
+    Kokkos::deep_copy(m.iscale, s_h);
+  }
+  m.scale_energy = c.scatter.energy;
+}
+
 template <int D>
 double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m) {
   const int ni = m.ni;
@@ -204,11 +228,14 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
   if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
   const auto& im = c.interface_materials[c.fracture_material];
   m.coh = cohesive_params(im);
+  const InterfaceMaterialMap map = interface_material_map(c, mesh);
+  upload_interface_materials<D>(c, map, m);
   auto if_h = mirror(m.iface);
   auto ia_h = mirror(m.iarea);
-  const double kmax = std::max(im.kn, im.ks);
   std::vector<double> step_q(ni);  // each interface's springs' stable step; their minimum below
   host_for("fdem::build_interfaces", ni, [&](int q) {
+    const auto& iq = map.material.empty() ? im : c.interface_materials[map.material[q]];
+    const double kmax = std::max(iq.kn, iq.ks);
     double xa[D][D], xb[D][D], n[D], ap;
     for (int k = 0; k < 2 * D; ++k) if_h(q, k) = mesh.ifaces[static_cast<size_t>(q) * 2 * D + k];
     for (int k = 0; k < D; ++k)

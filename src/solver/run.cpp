@@ -10,6 +10,7 @@
 #include "io/output.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
+#include "solver/interface_materials.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
@@ -126,6 +127,7 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
+  if (mesh.num_ifaces() > 0) report["interfaces"] = interface_material_report(c, interface_material_map(c, mesh));
   const MemoryBudget mem = available_memory();
   report["memory"] = {{"estimated_bytes", mesh.num_elems() * bytes_per_element(c.dim)},
                       {"available_bytes", mem.bytes},

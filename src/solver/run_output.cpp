@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "common/error.hpp"
+#include "solver/interface_materials.hpp"
 
 namespace fdem {
 
@@ -161,6 +162,12 @@ RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostM
     if (!note.empty()) std::fprintf(stderr, "fdem: warning: %s\n", note.c_str());
   } else {
     writer_ = std::make_unique<SnapshotWriter>(out, mesh);
+  }
+  const InterfaceMaterialMap map = interface_material_map(c, mesh);
+  if (!map.material.empty()) {
+    std::vector<std::string> names;
+    for (const auto& im : c.interface_materials) names.push_back(im.name);
+    writer_->add_interface_fields(names, map.material, map.scale);
   }
 }
 

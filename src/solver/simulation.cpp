@@ -23,6 +23,7 @@ void Simulation<D>::set_strength_reduction(double factor) {
   m.coh.c = coh0_.c / factor;
   m.coh.tanphi = coh0_.tanphi / factor;
   m.coh.rescale = srf_hist_ / factor;
+  m.srf = factor;  // interfaces with their own parameters (InterfaceData::params)
   if (contact_) contact_->law.mu = mu0_ / factor;
 }
 
@@ -371,6 +372,7 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
            [&](const std::vector<double>& a) {
              srf_ = a[0];
              srf_hist_ = a[1];
+             m.srf = srf_;
              m.coh.rescale = a[2];
            },
            /*optional=*/true);

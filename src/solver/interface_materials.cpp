@@ -1,0 +1,128 @@
+#include "solver/interface_materials.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <utility>
+
+#include "common/error.hpp"
+
+namespace fdem {
+
+namespace {
+
+// SplitMix64: a counter-based generator, so that a factor depends on (seed, q, draw) only.
+std::uint64_t splitmix64(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// Uniform in (0, 1) from (seed, q, draw).
+double uniform(std::uint64_t seed, long q, int draw) {
+  const std::uint64_t h =
+      splitmix64(splitmix64(seed * 0x2545f4914f6cdd1dULL + static_cast<std::uint64_t>(q)) +
+                 static_cast<std::uint64_t>(draw));
+  return (static_cast<double>(h >> 11) + 0.5) * 0x1.0p-53;
+}
+
+double normal_pdf(double x) { return std::exp(-0.5 * x * x) / std::sqrt(2 * M_PI); }
+double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
+
+}  // namespace
+
+double strength_factor(const StrengthScatter& s, long q) {
+  if (s.distribution == "weibull") {
+    // w = lambda (-ln U)^(1/m) with lambda = 1 / Gamma(1 + 1/m): mean 1.
+    const double lambda = 1.0 / std::tgamma(1.0 + 1.0 / s.modulus);
+    return lambda * std::pow(-std::log(uniform(s.seed, q, 0)), 1.0 / s.modulus);
+  }
+  if (s.distribution == "normal") {
+    // 1 + cov N(0,1) truncated to [lower, upper] (rejection, Box-Muller), divided by the mean of
+    // the truncated distribution so that the mean stays 1.
+    const double a = (s.lower - 1.0) / s.cov, b = (s.upper - 1.0) / s.cov;
+    const double mean = 1.0 + s.cov * (normal_pdf(a) - normal_pdf(b)) / (normal_cdf(b) - normal_cdf(a));
+    for (int draw = 0; draw < 2000; draw += 2) {
+      const double u1 = uniform(s.seed, q, draw), u2 = uniform(s.seed, q, draw + 1);
+      const double z = std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
+      const double w = 1.0 + s.cov * z;
+      if (w >= s.lower && w <= s.upper) return w / mean;
+    }
+    return 1.0 / mean;  // not reached for any allowed bounds (probability below 1e-300)
+  }
+  return 1.0;
+}
+
+InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh) {
+  InterfaceMaterialMap map;
+  const long ni = mesh.num_ifaces();
+  map.count.assign(c.interface_materials.size(), 0);
+  if (ni == 0) return map;
+  if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
+  const bool by_place = !c.region_iface_material.empty() || !c.pair_iface_material.empty();
+  const bool scatter = !c.scatter.distribution.empty();
+  if (!by_place) {
+    map.count[c.fracture_material] = ni;
+  } else {
+    // Material of each (region A, region B) pair of region indices.
+    const int nr = static_cast<int>(mesh.region_names.size());
+    std::vector<int> of_pair(static_cast<size_t>(nr) * nr, c.fracture_material);
+    for (int a = 0; a < nr; ++a)
+      for (int b = 0; b < nr; ++b) {
+        const std::string& ra = mesh.region_names[a];
+        const std::string& rb = mesh.region_names[b];
+        int& m = of_pair[static_cast<size_t>(a) * nr + b];
+        if (a == b) {
+          const auto it = c.region_iface_material.find(ra);
+          if (it != c.region_iface_material.end()) m = it->second;
+        } else {
+          const auto it =
+              c.pair_iface_material.find(ra < rb ? std::make_pair(ra, rb) : std::make_pair(rb, ra));
+          if (it != c.pair_iface_material.end()) m = it->second;
+        }
+      }
+    if (mesh.iface_elems.size() != 2 * static_cast<size_t>(ni))
+      throw InputError(c.file + ": fracture: interface materials by region need the interfaces' elements");
+    map.material.resize(ni);
+    for (long q = 0; q < ni; ++q) {
+      const int ra = mesh.elem_region[mesh.iface_elems[2 * q]],
+                rb = mesh.elem_region[mesh.iface_elems[2 * q + 1]];
+      map.material[q] = of_pair[static_cast<size_t>(ra) * nr + rb];
+      ++map.count[map.material[q]];
+    }
+  }
+  if (scatter) {
+    if (map.material.empty()) map.material.assign(ni, c.fracture_material);
+    map.scale.resize(ni);
+    for (long q = 0; q < ni; ++q) map.scale[q] = static_cast<float>(strength_factor(c.scatter, q));
+  }
+  return map;
+}
+
+nlohmann::json interface_material_report(const Case& c, const InterfaceMaterialMap& map) {
+  nlohmann::json j = nlohmann::json::object();
+  nlohmann::json counts = nlohmann::json::object();
+  for (size_t m = 0; m < map.count.size(); ++m)
+    if (map.count[m] > 0) counts[c.interface_materials[m].name] = map.count[m];
+  j["interfaces_per_material"] = counts;
+  if (!map.scale.empty()) {
+    double lo = map.scale[0], hi = map.scale[0], sum = 0;
+    for (float w : map.scale) {
+      lo = std::min(lo, static_cast<double>(w));
+      hi = std::max(hi, static_cast<double>(w));
+      sum += w;
+    }
+    j["strength_scatter"] = {{"distribution", c.scatter.distribution},
+                             {"seed", c.scatter.seed},
+                             {"factor_mean", sum / map.scale.size()},
+                             {"factor_min", lo},
+                             {"factor_max", hi},
+                             {"energy_scaled", c.scatter.energy}};
+  }
+  return j;
+}
+
+}  // namespace fdem
