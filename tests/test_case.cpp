@@ -101,6 +101,8 @@ TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
   EXPECT_EQ(c.mesh.kind, "disc");
   EXPECT_DOUBLE_EQ(c.mesh.radius, 0.05);
   EXPECT_DOUBLE_EQ(c.mesh.element_size, 0.003);
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[0], 0.0);  // the loaded diameter is meshed as element edges
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[1], 1.0);
   EXPECT_DOUBLE_EQ(c.mesh.origin[0], 0.0);
   EXPECT_DOUBLE_EQ(c.mesh.origin[1], 0.0);
   EXPECT_EQ(c.mesh.region, "body");
@@ -388,6 +390,15 @@ TEST(CaseErrors, OutOfRangeNamesPathValueAndRange) {
   EXPECT_HAS(error_of(d), "mesh.element_size");
   d["mesh"] = {{"generator", "disc"}, {"radius", 0.05}, {"element_size", 0.1}};
   EXPECT_HAS(error_of(d), "mesh.element_size");
+  // embedded diameter: a zero direction, a wrong length; the rectangle does not take the key
+  d["mesh"] = {
+      {"generator", "disc"}, {"radius", 0.05}, {"element_size", 0.01}, {"embedded_diameter", {0, 0}}};
+  EXPECT_HAS(error_of(d), "mesh.embedded_diameter: the direction is zero");
+  d["mesh"]["embedded_diameter"] = {1};
+  EXPECT_HAS(error_of(d), "mesh.embedded_diameter");
+  d["mesh"] = {
+      {"generator", "rectangle"}, {"size", {1, 1}}, {"cells", {2, 2}}, {"embedded_diameter", {0, 1}}};
+  EXPECT_HAS(error_of(d), "embedded_diameter");
   // zero platen normal
   d = base_doc();
   d["platens"][0]["normal"] = {0, 0};

@@ -88,10 +88,21 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);
   } else {
-    R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
+    if (g == "disc")
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "embedded_diameter"});
+    else
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
     s.radius = R.number(m, P, "radius", gt(0));
     s.element_size = R.number(m, P, "element_size", between(0, true, s.radius, false));
+    if (g == "disc") {
+      Vec3 u = R.vec(m, P, "embedded_diameter", d, Vec3{0, 0, 0});
+      const double len = std::sqrt(u[0] * u[0] + u[1] * u[1]);
+      if (m.contains("embedded_diameter") && !m["embedded_diameter"].is_null() && !(len > 0))
+        R.fail(child(P, "embedded_diameter"),
+               "the direction is zero (allowed: any non-zero [dx, dy]; it is normalised)");
+      if (len > 0) s.diameter = {u[0] / len, u[1] / len, 0};
+    }
   }
   s.region = R.name(m, P, "region", std::string("body"));
 }
