@@ -95,13 +95,13 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
     s.radius = R.number(m, P, "radius", gt(0));
     s.element_size = R.number(m, P, "element_size", between(0, true, s.radius, false));
-    if (g == "disc") {
-      Vec3 u = R.vec(m, P, "embedded_diameter", d, Vec3{0, 0, 0});
+    if (g == "disc" && m.contains("embedded_diameter")) {  // optional, no default written (none)
+      const Vec3 u = R.vec(m, P, "embedded_diameter", d, std::nullopt);
       const double len = std::sqrt(u[0] * u[0] + u[1] * u[1]);
-      if (m.contains("embedded_diameter") && !m["embedded_diameter"].is_null() && !(len > 0))
+      if (!(len > 0))
         R.fail(child(P, "embedded_diameter"),
                "the direction is zero (allowed: any non-zero [dx, dy]; it is normalised)");
-      if (len > 0) s.diameter = {u[0] / len, u[1] / len, 0};
+      s.diameter = {u[0] / len, u[1] / len, 0};
     }
   }
   s.region = R.name(m, P, "region", std::string("body"));

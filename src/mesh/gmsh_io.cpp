@@ -647,7 +647,7 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       gmsh::model::occ::synchronize();
       gmsh::vectorpair faces, bnd;
       for (int t : surfaces) faces.push_back({2, t});
-      gmsh::model::getBoundary(faces, bnd, true, false, false);  // the outer circle only
+      gmsh::model::getBoundary(faces, bnd, len > 0, false, false);  // combined: the outer circle only
       std::vector<int> curves;
       for (const auto& [d, t] : bnd) curves.push_back(std::abs(t));
       const int ps = gmsh::model::addPhysicalGroup(2, surfaces);
