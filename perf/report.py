@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 GROWTH_LIMIT = 1.3
 YARDSTICK_LIMIT = 1.6  # issue 19: the intact full step at most 1.6 times the yardstick (perf/yardstick.hpp)
 BANDWIDTH_TARGET = 0.30
-CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.05}  # cases/brazilian_disc/case.json
+CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.1}  # cases/brazilian_disc/case.json
 
 
 def load(path):
@@ -575,32 +575,53 @@ class Report:
         ft = d["ft_Pa"]
         self.w(f"`fdem run {d['case']} --set mesh.element_size=D --set parameters.rate=V` (perf/sweep_brazil.py), "
                f"OMP_NUM_THREADS = {runs[0]['threads'] if runs else '?'}; error of `results.tensile_strength_Pa` "
-               f"against the input f_t = {ft / 1e6:g} MPa; wall time from summary.json (set-up, run and output).")
+               f"against the input f_t = {ft / 1e6:g} MPa; wall time from summary.json (set-up, run and output). "
+               "One mesh does not decide the strength (issue 23): each point is the mean over the meshes of "
+               "element sizes spread around D (`--realisations`), its error bar their standard deviation.")
         every = d["runs"] + d.get("left_out", [])
-        sizes = sorted({r["element_size_m"] for r in every}, reverse=True)
+        sizes = sorted({r.get("nominal_size_m", r["element_size_m"]) for r in every}, reverse=True)
         rates = sorted({r["rate_m_per_s"] for r in every}, reverse=True)
+        nreal = max([r.get("realisation", 0) + 1 for r in d["runs"]] or [1])
         self.w()
         self.w("This sweep: `perf/sweep_brazil.py --sizes " + ",".join(f"{x:g}" for x in sizes) + " --rates " +
-               ",".join(f"{x:g}" for x in rates) + "` (the sizes and rates of brazil.json; `perf/run_all` "
-               "uses its own lists).")
+               ",".join(f"{x:g}" for x in rates) + f" --realisations {nreal}` (the sizes and rates of brazil.json; "
+               "`perf/run_all` uses its own lists).")
         self.w()
-        # Pareto front: no other run has both less error and less time
+        # one point per (nominal size, rate): the mean over its meshes, the scatter as standard deviation
+        groups = {}
         for r in runs:
-            r["_abs"] = abs(r["error"])
-        front = [r for r in runs if not any(o is not r and o["_abs"] <= r["_abs"] and o["wall_seconds"] <= r["wall_seconds"]
-                                            and (o["_abs"] < r["_abs"] or o["wall_seconds"] < r["wall_seconds"])
-                                            for o in runs)]
+            groups.setdefault((r.get("nominal_size_m", r["element_size_m"]), r["rate_m_per_s"]), []).append(r)
+        pts = []
+        for (h0, v), rr in groups.items():
+            errs = [r["error"] for r in rr]
+            m = sum(errs) / len(errs)
+            sd = math.sqrt(sum((e - m) ** 2 for e in errs) / (len(errs) - 1)) if len(errs) > 1 else 0.0
+            pts.append({"element_size_m": h0, "rate_m_per_s": v, "n": len(rr), "error": m, "std": sd, "_abs": abs(m),
+                        "wall_seconds": sum(r["wall_seconds"] for r in rr) / len(rr),
+                        "elements": round(sum(r["elements"] for r in rr) / len(rr)),
+                        "steps": round(sum(r["steps"] for r in rr) / len(rr)),
+                        "tensile_strength_Pa": sum(r["tensile_strength_Pa"] for r in rr) / len(rr),
+                        "element_steps_per_second": sum(r["element_steps_per_second"] for r in rr) / len(rr),
+                        "stop_reason": ", ".join(sorted({r["stop_reason"] for r in rr}))})
+
+        def is_default(r):
+            return (abs(r["element_size_m"] - CASE_DEFAULT["element_size_m"]) < 2e-5 and
+                    abs(r["rate_m_per_s"] - CASE_DEFAULT["rate_m_per_s"]) < 1e-9)
+
+        # Pareto front: no other point has both less error (of the mean) and less time
+        front = [r for r in pts if not any(o is not r and o["_abs"] <= r["_abs"] and o["wall_seconds"] <= r["wall_seconds"]
+                                           and (o["_abs"] < r["_abs"] or o["wall_seconds"] < r["wall_seconds"])
+                                           for o in pts)]
         front.sort(key=lambda r: r["wall_seconds"])
         rows = []
-        for r in sorted(runs, key=lambda r: (r["element_size_m"], -r["rate_m_per_s"])):
-            is_default = (abs(r["element_size_m"] - CASE_DEFAULT["element_size_m"]) < 2e-5 and
-                          abs(r["rate_m_per_s"] - CASE_DEFAULT["rate_m_per_s"]) < 1e-9)
-            rows.append([f"{1000 * r['element_size_m']:g}", f"{r['rate_m_per_s']:g}", r["elements"], r["steps"],
+        for r in sorted(pts, key=lambda r: (r["element_size_m"], -r["rate_m_per_s"])):
+            rows.append([f"{1000 * r['element_size_m']:g}", f"{r['rate_m_per_s']:g}", r["n"], r["elements"], r["steps"],
                          f"{r['tensile_strength_Pa'] / 1e6:.3f}", f"{100 * r['error']:+.2f} %",
+                         f"{100 * r['std']:.2f} %" if r["n"] > 1 else "-",
                          f"{r['wall_seconds']:.1f}", f"{r['element_steps_per_second']:.3g}", r["stop_reason"],
-                         ("front" if r in front else "") + (" (case default)" if is_default else "")])
-        self.w(table(["d [mm]", "rate [m/s]", "elements", "steps", "sigma_t [MPa]", "error", "wall [s]",
-                      "element-steps/s", "stopped by", "Pareto"], rows))
+                         ("front" if r in front else "") + (" (case default)" if is_default(r) else "")])
+        self.w(table(["d [mm]", "rate [m/s]", "meshes", "elements", "steps", "mean sigma_t [MPa]", "mean error",
+                      "std", "mean wall [s]", "element-steps/s", "stopped by", "Pareto"], rows))
         self.w()
         if d.get("left_out"):
             self.w("Left out (estimated cost above the sweep's limit): " + ", ".join(
@@ -610,56 +631,57 @@ class Report:
             self.w(f"Failed: `{r['command']}` (exit status {r['exit_status']}).")
             self.w()
         if front:
-            self.w("Least error per second (the Pareto front: no other run has both less error and less time): " +
-                   "; ".join(f"d = {1000 * r['element_size_m']:g} mm at {r['rate_m_per_s']:g} m/s "
-                             f"({100 * r['error']:+.2f} %, {r['wall_seconds']:.0f} s)" for r in front) + ".")
+            self.w("Least error per second (the Pareto front of the means: no other point has both less error and "
+                   "less time): " + "; ".join(f"d = {1000 * r['element_size_m']:g} mm at {r['rate_m_per_s']:g} m/s "
+                                              f"({100 * r['error']:+.2f} % +- {100 * r['std']:.2f} %, "
+                                              f"{r['wall_seconds']:.0f} s)" for r in front) + ".")
             self.w()
-        dflt = [r for r in runs if abs(r["element_size_m"] - CASE_DEFAULT["element_size_m"]) < 2e-5 and
-                abs(r["rate_m_per_s"] - CASE_DEFAULT["rate_m_per_s"]) < 1e-9]
+        dflt = [r for r in pts if is_default(r)]
         head = (f"Case default (`cases/brazilian_disc/case.json`: d = {1000 * CASE_DEFAULT['element_size_m']:.3g} mm, "
                 f"rate {CASE_DEFAULT['rate_m_per_s']:g} m/s)")
         if not dflt:
             self.w(head + ": not in this sweep.")
         else:
             r = dflt[0]
-            better = [o for o in runs if o is not r and o["_abs"] <= r["_abs"] and o["wall_seconds"] <= r["wall_seconds"]]
+            better = [o for o in pts if o is not r and o["_abs"] <= r["_abs"] and o["wall_seconds"] <= r["wall_seconds"]]
             if r in front:
-                self.w(head + f": on the front ({100 * r['error']:+.2f} %, {r['wall_seconds']:.0f} s).")
+                self.w(head + f": on the front ({100 * r['error']:+.2f} % +- {100 * r['std']:.2f} %, "
+                       f"{r['wall_seconds']:.0f} s).")
             else:
                 b = min(better, key=lambda o: o["wall_seconds"])
-                self.w(head + f": {100 * r['error']:+.2f} % in {r['wall_seconds']:.0f} s, not on the front: "
-                       f"d = {1000 * b['element_size_m']:g} mm at {b['rate_m_per_s']:g} m/s gives "
-                       f"{100 * b['error']:+.2f} % in {b['wall_seconds']:.0f} s.")
+                self.w(head + f": {100 * r['error']:+.2f} % +- {100 * r['std']:.2f} % in {r['wall_seconds']:.0f} s, "
+                       f"not on the front: d = {1000 * b['element_size_m']:g} mm at {b['rate_m_per_s']:g} m/s gives "
+                       f"{100 * b['error']:+.2f} % +- {100 * b['std']:.2f} % in {b['wall_seconds']:.0f} s.")
         self.w()
         fig, ax = plt.subplots(figsize=(8, 5.2))
-        rates = sorted({r["rate_m_per_s"] for r in runs}, reverse=True)
+        rates = sorted({r["rate_m_per_s"] for r in pts}, reverse=True)
         markers = "osD^v<>p"
         for i, v in enumerate(rates):
-            rr = sorted([r for r in runs if r["rate_m_per_s"] == v], key=lambda r: r["wall_seconds"])
-            ax.loglog([r["wall_seconds"] for r in rr], [max(100 * r["_abs"], 1e-3) for r in rr],
-                      markers[i % len(markers)], label=f"rate {v:g} m/s", ms=6)
+            rr = sorted([r for r in pts if r["rate_m_per_s"] == v], key=lambda r: r["wall_seconds"])
+            ax.errorbar([r["wall_seconds"] for r in rr], [100 * r["error"] for r in rr],
+                        yerr=[100 * r["std"] for r in rr], fmt=markers[i % len(markers)], capsize=3, ms=6,
+                        label=f"rate {v:g} m/s")
             for r in rr:
-                ax.annotate(f"{1000 * r['element_size_m']:g} mm", (r["wall_seconds"], max(100 * r["_abs"], 1e-3)),
+                ax.annotate(f"{1000 * r['element_size_m']:g} mm", (r["wall_seconds"], 100 * r["error"]),
                             fontsize=7, xytext=(4, 3), textcoords="offset points")
         if front:
-            ax.loglog([r["wall_seconds"] for r in front], [max(100 * r["_abs"], 1e-3) for r in front], "k--", lw=0.8,
-                      label="least error per time (Pareto front)")
-        for r in runs:
-            if (abs(r["element_size_m"] - CASE_DEFAULT["element_size_m"]) < 2e-5 and
-                    abs(r["rate_m_per_s"] - CASE_DEFAULT["rate_m_per_s"]) < 1e-9):
-                ax.loglog([r["wall_seconds"]], [max(100 * r["_abs"], 1e-3)], "o", mfc="none", mec="r", ms=14,
-                          label="case default")
+            ax.plot([r["wall_seconds"] for r in front], [100 * r["error"] for r in front], "k--", lw=0.8,
+                    label="least |mean error| per time (Pareto front)")
+        for r in dflt:
+            ax.plot([r["wall_seconds"]], [100 * r["error"]], "o", mfc="none", mec="r", ms=14, label="case default")
         if bad:
             ax.text(0.99, 0.01, "failed (no strength): " + ", ".join(
                 f"{1000 * r['element_size_m']:g} mm at {r['rate_m_per_s']:g} m/s" for r in bad),
                 transform=ax.transAxes, ha="right", va="bottom", fontsize=7, color="r")
-        ax.set_xlabel("wall time of the run [s]")
-        ax.set_ylabel("|sigma_t - f_t| / f_t [%]")
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xscale("log")
+        ax.set_xlabel("mean wall time of a run [s]")
+        ax.set_ylabel("(sigma_t - f_t) / f_t [%]: mean +- std over meshes")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8)
         fig.subplots_adjust(bottom=0.22)
-        self.footer(fig, f"perf/sweep_brazil.py: fdem run {d['case']} --set mesh.element_size=D --set parameters.rate=V",
-                    runs[0]["threads"] if runs else "?")
+        self.footer(fig, f"perf/sweep_brazil.py: fdem run {d['case']} --set mesh.element_size=D --set parameters.rate=V"
+                    f" ({nreal} meshes per point)", runs[0]["threads"] if runs else "?")
         p = self.save(fig, "perf_brazil.png")
         self.w(f"![Brazilian disc: error against wall time]({p})")
         self.w()

@@ -23,6 +23,7 @@ using json = nlohmann::json;
 namespace fs = std::filesystem;
 
 const std::string kDisc = std::string(FDEM_SOURCE_DIR) + "/cases/brazilian_disc/case.json";
+const std::string kDiscPaper = std::string(FDEM_SOURCE_DIR) + "/cases/brazilian_disc/case_paper.json";
 const std::string kBar = std::string(FDEM_TEST_DATA) + "/cases/bar.json";
 constexpr double kPi = 3.14159265358979323846;
 
@@ -93,14 +94,18 @@ struct TempDir {
 
 // ---------------------------------------------------------------------------------------------
 
+// The paper's setting (flat rigid platens, a Delaunay mesh without the embedded diameter): the case
+// variant case_paper.json (cases/brazilian_disc/README.md).
 TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
-  Case c = fdem::load_case(kDisc);
-  EXPECT_EQ(c.file, kDisc);
+  Case c = fdem::load_case(kDiscPaper);
+  EXPECT_EQ(c.file, kDiscPaper);
   EXPECT_EQ(c.name, "brazilian_disc");
   EXPECT_EQ(c.dim, 2);
   EXPECT_EQ(c.mesh.kind, "disc");
   EXPECT_DOUBLE_EQ(c.mesh.radius, 0.05);
   EXPECT_DOUBLE_EQ(c.mesh.element_size, 0.003);
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[0], 0.0);  // no embedded diameter
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[1], 0.0);
   EXPECT_DOUBLE_EQ(c.mesh.origin[0], 0.0);
   EXPECT_DOUBLE_EQ(c.mesh.origin[1], 0.0);
   EXPECT_EQ(c.mesh.region, "body");
@@ -163,8 +168,25 @@ TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
   EXPECT_EQ(c.resolved["boundary"]["gravity"], json::array({0.0, 0.0}));
 }
 
+// The case's default (issue 23): the paper's disc and parameters, its loaded diameter meshed as
+// element edges, padded platens (normal stiffness 1e12 Pa/m per area), 0.1 m/s per platen, closure
+// 1.6 mm, stop at a drop of 30 % from the peak.
+TEST(CaseExamples, BrazilianDiscDefaultHasTheDiameterAndPaddedPlatens) {
+  Case c = fdem::load_case(kDisc);
+  EXPECT_EQ(c.name, "brazilian_disc");
+  EXPECT_DOUBLE_EQ(c.mesh.element_size, 0.003);
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[0], 0.0);
+  EXPECT_DOUBLE_EQ(c.mesh.diameter[1], 1.0);
+  ASSERT_EQ(c.platens.size(), 2u);
+  for (const auto& p : c.platens) EXPECT_DOUBLE_EQ(p.kn, 1e12);
+  EXPECT_DOUBLE_EQ(c.platens[0].velocity[1], -0.1);
+  EXPECT_NEAR(c.end_time, 8e-3, 1e-15);
+  EXPECT_DOUBLE_EQ(c.stop_drop_fraction, 0.3);
+  EXPECT_DOUBLE_EQ(c.interface_materials.at(0).ft, 8e6);
+}
+
 TEST(CaseExamples, BrazilianDiscRateIsOneOverride) {
-  Case c = fdem::load_case(kDisc, {"parameters.rate=0.001"});  // the paper's 1 mm/s
+  Case c = fdem::load_case(kDiscPaper, {"parameters.rate=0.001"});  // the paper's 1 mm/s
   EXPECT_DOUBLE_EQ(c.platens[0].velocity[1], -0.001);
   EXPECT_DOUBLE_EQ(c.platens[1].velocity[1], 0.001);
   EXPECT_NEAR(c.end_time, 0.4, 1e-12);
@@ -388,6 +410,15 @@ TEST(CaseErrors, OutOfRangeNamesPathValueAndRange) {
   EXPECT_HAS(error_of(d), "mesh.element_size");
   d["mesh"] = {{"generator", "disc"}, {"radius", 0.05}, {"element_size", 0.1}};
   EXPECT_HAS(error_of(d), "mesh.element_size");
+  // embedded diameter: a zero direction, a wrong length; the rectangle does not take the key
+  d["mesh"] = {
+      {"generator", "disc"}, {"radius", 0.05}, {"element_size", 0.01}, {"embedded_diameter", {0, 0}}};
+  EXPECT_HAS(error_of(d), "mesh.embedded_diameter: the direction is zero");
+  d["mesh"]["embedded_diameter"] = {1};
+  EXPECT_HAS(error_of(d), "mesh.embedded_diameter");
+  d["mesh"] = {
+      {"generator", "rectangle"}, {"size", {1, 1}}, {"cells", {2, 2}}, {"embedded_diameter", {0, 1}}};
+  EXPECT_HAS(error_of(d), "embedded_diameter");
   // zero platen normal
   d = base_doc();
   d["platens"][0]["normal"] = {0, 0};

@@ -43,25 +43,32 @@ std::vector<T> read_dataset(hid_t file, const std::string& name, hid_t type, std
   return out;
 }
 
-// Brazilian disc at the paper's element size (3 mm) and a loading rate of 0.1 m/s per platen
-// (100 times the paper's; the strength moved by less than 1 % between 0.02, 0.05 and 0.1 m/s,
-// cases/brazilian_disc/README.md): the tensile strength 2 P / (pi D L) within 5 % of the input
-// f_t = 8 MPa, and a split through the central half of the disc parallel to the loaded diameter:
-// the failed interfaces with |y| < R/2 reach from below y = -R/3 to above y = R/3, and lie within
-// R/3 of the diameter on average. (On this mesh the split runs about 15 mm = 0.3 R left of the
-// diameter: cases/brazilian_disc/README.md; the tolerance records that, it is not a target.)
-TEST(CaseBrazilianDisc, ReducedRunGivesInputStrengthAndCentralSplit) {
-  const std::string out = (fs::temp_directory_path() / ("fdem_case_disc_" + std::to_string(::getpid()))).string();
+// Brazilian disc, reduced (issue 23: one mesh must not decide the strength): the case as shipped
+// (loaded diameter meshed as element edges, padded platens, 0.1 m/s per platen) on two of the four
+// R/12 meshes of the scatter study (4.10 and 4.38 mm; the default is 3 mm = R/17). Measured on
+// those four (perf/brazil_scatter.py, cases/brazilian_disc/README.md): +8.4, +10.3, +14.5 and
+// +7.5 % from f_t, mean +10.2 %, standard deviation 3.1 %; these two +10.3 and +7.5 %. Each run: the
+// tensile strength 2 P / (pi D t) between f_t and f_t + 16 % (the R/12 mean plus or minus two
+// standard deviations), and the failed interfaces of the central half of the diameter (|y| < R/2)
+// reach from below y = -R/3 to above R/3 and lie within R/10 of the loaded diameter on average (the
+// paper's setting, case_paper.json, gives 12 mm = 0.24 R on average over ten R/12 meshes).
+class CaseBrazilianDiscMeshes : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CaseBrazilianDiscMeshes, StrengthAndSplitAlongTheLoadedDiameter) {
+  const std::string h = GetParam();
+  const std::string out =
+      (fs::temp_directory_path() / ("fdem_case_disc_" + std::to_string(::getpid()) + "_" + h)).string();
   fs::remove_all(out);
   const std::string cmd = std::string(FDEM_BINARY) + " run " + FDEM_SOURCE_DIR +
                           "/cases/brazilian_disc/case.json --quiet --out " + out +
-                          " --set mesh.element_size=0.003 --set parameters.rate=0.1"
-                          " --set output.snapshot_count=4 > " + out + ".log 2>&1";
+                          " --set mesh.element_size=" + h + " --set output.snapshot_count=1 > " + out +
+                          ".log 2>&1";
   ASSERT_EQ(run(cmd), 0) << slurp(out + ".log");
   const auto s = nlohmann::json::parse(slurp(out + "/summary.json"));
   const double ft = 8e6, R = 0.05;
   const double sigma = s["results"]["tensile_strength_Pa"].get<double>();
-  EXPECT_NEAR(sigma / ft, 1.0, 0.05) << "tensile strength " << sigma;
+  EXPECT_GT(sigma / ft, 1.0) << "tensile strength " << sigma << " at h = " << h;
+  EXPECT_LT(sigma / ft, 1.16) << "tensile strength " << sigma << " at h = " << h;
   EXPECT_GT(s["interfaces_failed"].get<long>(), 10);
 
   const hid_t f = H5Fopen((out + "/snapshots.h5").c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -95,10 +102,13 @@ TEST(CaseBrazilianDisc, ReducedRunGivesInputStrengthAndCentralSplit) {
   ASSERT_GT(n, 3) << "no failed interfaces in the central part";
   EXPECT_LT(ymin, -R / 3) << "the split does not cross the centre";
   EXPECT_GT(ymax, R / 3) << "the split does not cross the centre";
-  EXPECT_LT(sum_abs_x / n, R / 3) << "mean distance of the central failed interfaces from the loaded diameter";
+  EXPECT_LT(sum_abs_x / n, R / 10)
+      << "mean distance of the central failed interfaces from the loaded diameter";
   fs::remove_all(out);
   fs::remove(out + ".log");
 }
+
+INSTANTIATE_TEST_SUITE_P(TwoMeshes, CaseBrazilianDiscMeshes, ::testing::Values("0.0041005", "0.0043785"));
 
 }  // namespace
 

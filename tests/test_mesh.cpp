@@ -634,6 +634,48 @@ TEST(MeshGenerators, DiscAreaSetsDeterminism) {
   EXPECT_EQ(d2.elems, d.elems);
 }
 
+// mesh.embedded_diameter (the Brazilian disc, cases/brazilian_disc/README.md): the diameter along
+// the given direction is a chain of element edges from one end on the circle to the other, the
+// boundary set is still the circle only, and the disc stays one conforming body.
+TEST(MeshGenerators, DiscEmbeddedDiameterIsAChainOfEdges) {
+  const double R = 0.05, cx = 0.01, cy = -0.02, h = R / 12;
+  const double u[2] = {0.6, 0.8};  // unit direction of the diameter
+  HostMesh d = fdem::generate_disc(cx, cy, R, h, "body", 3 * u[0], 3 * u[1]);
+  EXPECT_NEAR(total_measure(d), kPi * R * R, 0.01 * kPi * R * R);
+  for (int e = 0; e < d.num_elems(); ++e) ASSERT_GT(measure(d, e), 0);
+  const auto on_line = [&](int id) {
+    const double* x = node_x(d, id);
+    return std::fabs(-(x[0] - cx) * u[1] + (x[1] - cy) * u[0]) < 1e-9 * R;
+  };
+  // element edges with both ends on the diameter: their lengths add up to 2 R
+  std::set<std::pair<int, int>> edges;
+  for (int e = 0; e < d.num_elems(); ++e)
+    for (int a = 0; a < 3; ++a) {
+      const int i = d.elems[3 * e + a], j = d.elems[3 * e + (a + 1) % 3];
+      if (on_line(i) && on_line(j)) edges.insert({std::min(i, j), std::max(i, j)});
+    }
+  double length = 0;
+  for (const auto& [i, j] : edges)
+    length += std::hypot(node_x(d, i)[0] - node_x(d, j)[0], node_x(d, i)[1] - node_x(d, j)[1]);
+  EXPECT_NEAR(length, 2 * R, 1e-9 * R);
+  EXPECT_GE(edges.size(), static_cast<std::size_t>(2 * R / h * 0.8));
+  // both ends are boundary nodes; no other node of the diameter is
+  const auto& bnd = d.node_sets.at("boundary");
+  int ends = 0;
+  for (int id : bnd) {
+    EXPECT_NEAR(std::hypot(node_x(d, id)[0] - cx, node_x(d, id)[1] - cy), R, 1e-9 * R);
+    ends += on_line(id);
+  }
+  EXPECT_EQ(ends, 2);
+  EXPECT_EQ(fdem::boundary_faces(d).size(), 2 * bnd.size());  // no face along the diameter
+  check_boundary_outward(d, {cx, cy, 0});
+  // without a direction the mesh is the plain disc
+  HostMesh p = fdem::generate_disc(cx, cy, R, h, "body");
+  HostMesh p0 = fdem::generate_disc(cx, cy, R, h, "body", 0, 0);
+  EXPECT_EQ(p.X, p0.X);
+  EXPECT_EQ(p.elems, p0.elems);
+}
+
 TEST(MeshGenerators, SphereVolumeSets) {
   const double R = 2.0;
   HostMesh s = fdem::generate_sphere({1, 0, -1}, R, R / 5);

@@ -90,6 +90,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   } else {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});
+    else if (g == "disc")
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "embedded_diameter"});
     else
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
@@ -99,6 +101,14 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
       s.mesher = R.string(m, P, "mesher");
       if (s.mesher != "delaunay" && s.mesher != "hxt")
         R.fail(child(P, "mesher"), "unknown mesher '" + s.mesher + "' (allowed: delaunay, hxt)");
+    }
+    if (g == "disc" && m.contains("embedded_diameter")) {  // optional, no default written (none)
+      const Vec3 u = R.vec(m, P, "embedded_diameter", d, std::nullopt);
+      const double len = std::sqrt(u[0] * u[0] + u[1] * u[1]);
+      if (!(len > 0))
+        R.fail(child(P, "embedded_diameter"),
+               "the direction is zero (allowed: any non-zero [dx, dy]; it is normalised)");
+      s.diameter = {u[0] / len, u[1] / len, 0};
     }
   }
   s.region = R.name(m, P, "region", std::string("body"));

@@ -665,7 +665,8 @@ HostMesh finish_generated(Extracted&& ex, const std::string& who) {
 
 }  // namespace
 
-HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region) {
+HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region, double dx,
+                       double dy) {
   const std::string who = "disc generator";
   check_generator_args(who, R, h);
   if (R / h > 5000)
@@ -676,12 +677,27 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
     return gmsh_call(who, "mesh the disc", [&] {
       gmsh::model::add("disc");
       const int s = gmsh::model::occ::addDisk(cx, cy, 0.0, R, R);
+      std::vector<int> surfaces{s};
+      const double len = std::sqrt(dx * dx + dy * dy);
+      if (len > 0) {  // the diameter along (dx, dy): the disc cut into two halves that share it
+        const double ux = R * dx / len, uy = R * dy / len;
+        const int a = gmsh::model::occ::addPoint(cx + ux, cy + uy, 0.0);
+        const int b = gmsh::model::occ::addPoint(cx - ux, cy - uy, 0.0);
+        const int l = gmsh::model::occ::addLine(a, b);
+        gmsh::vectorpair out;
+        std::vector<gmsh::vectorpair> map;
+        gmsh::model::occ::fragment({{2, s}}, {{1, l}}, out, map);
+        surfaces.clear();
+        for (const auto& [d, t] : out)
+          if (d == 2) surfaces.push_back(t);
+      }
       gmsh::model::occ::synchronize();
-      gmsh::vectorpair bnd;
-      gmsh::model::getBoundary({{2, s}}, bnd, false, false, false);
+      gmsh::vectorpair faces, bnd;
+      for (int t : surfaces) faces.push_back({2, t});
+      gmsh::model::getBoundary(faces, bnd, len > 0, false, false);  // combined: the outer circle only
       std::vector<int> curves;
       for (const auto& [d, t] : bnd) curves.push_back(std::abs(t));
-      const int ps = gmsh::model::addPhysicalGroup(2, {s});
+      const int ps = gmsh::model::addPhysicalGroup(2, surfaces);
       gmsh::model::setPhysicalName(2, ps, rname);
       const int pc = gmsh::model::addPhysicalGroup(1, curves);
       gmsh::model::setPhysicalName(1, pc, "boundary");

@@ -44,6 +44,8 @@ struct MeshSpec {
   std::array<double, 3> origin{0, 0, 0};  // rectangle, box: lower corner; disc, sphere: centre
   std::array<double, 3> size{0, 0, 0};    // rectangle: width, height; box: lx, ly, lz
   double radius = 0;        // disc, sphere
+  std::array<double, 3> diameter{0, 0, 0};  // disc: direction of a diameter meshed as element edges
+                                            // (zero: none)
   std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
   std::string region = "body";            // generators: name of the single region
   std::string mesher = "delaunay";        // sphere: Gmsh's 3D algorithm, "delaunay" or "hxt"
@@ -59,8 +61,10 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size = 0);
 HostMesh generate_crossed_rectangle(double x0, double y0, double w, double h, int nx, int ny,
                                     const std::string& region = "body");
 // Disc of radius R centred at (cx, cy), unstructured triangles of size h (Gmsh). Node sets:
-// "boundary", "all".
-HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region = "body");
+// "boundary", "all". A non-zero (dx, dy) also meshes the diameter along that direction as element
+// edges (nodes at both of its ends on the circle), so that a crack can run straight along it.
+HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region = "body",
+                       double dx = 0, double dy = 0);
 // Box of tetrahedra: nx*ny*nz hexahedral cells, each split into 6 tetrahedra (Kuhn). Node sets:
 // xmin/xmax/ymin/ymax/zmin/zmax, "all".
 HostMesh generate_box(const std::array<double, 3>& origin, const std::array<double, 3>& size,
