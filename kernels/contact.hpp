@@ -4,6 +4,7 @@
 //   kernels/contact/geometry.hpp      face normal, projection, stored face geometry, closest point
 //   kernels/contact/broad_phase.hpp   box reduction, cell grid, candidate lists, history transfer
 //   kernels/contact/surfaces.hpp      active faces, clusters, surface nodes, handover of interfaces
+//   kernels/contact/list_update.hpp   candidate lists after a handover by a local search (no rebuild)
 //   kernels/contact/narrow_phase.hpp  the contact law (contact_pair), force kernel, spring energy
 //   kernels/friction.hpp              the Coulomb shear spring (shared with the platens)
 // Host orchestration: src/solver/contact_system.cpp. Launchers copy the Views they need into
@@ -11,6 +12,7 @@
 // kernels; (i, k) indexing only.
 #include "kernels/contact/broad_phase.hpp"
 #include "kernels/contact/geometry.hpp"
+#include "kernels/contact/list_update.hpp"
 #include "kernels/contact/narrow_phase.hpp"
 #include "kernels/contact/status.hpp"
 #include "kernels/contact/surfaces.hpp"

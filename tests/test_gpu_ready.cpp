@@ -146,10 +146,12 @@ Case pressed_case() {
 
 // What `n` unsampled steps of `sim` ask for: on the steps that neither re-check the contact
 // system's device status nor rebuild its candidate lists ("quiet" steps), on those that re-check
-// without a rebuild, and on those that rebuild (the grid and the list sizes come from the device).
+// without a rebuild, and on those that rebuild or hand interfaces over (the grid, the counts of
+// new surfaces and the list sizes come from the device; a handover updates the lists by a local
+// search, kernels/contact/list_update.hpp).
 struct StepsRecord {
   Recorded quiet, recheck, build;
-  int quiet_steps = 0, recheck_steps = 0, build_steps = 0;
+  int quiet_steps = 0, recheck_steps = 0, build_steps = 0, update_steps = 0;
 };
 
 template <int D>
@@ -158,13 +160,17 @@ StepsRecord record_steps(Simulation<D>& sim, int n) {
   Hooks hooks;
   for (int s = 0; s < n; ++s) {
     const long syncs = sim.contact()->syncs(), builds = sim.contact()->builds();
+    const long updates = sim.contact()->list_updates(), checks = sim.contact()->handover_checks();
     Recorded r;
     const long fences = fence_count();
     g_rec = &r;
     sim.step(false);
     g_rec = nullptr;
     for (long k = fences; k < fence_count(); ++k) r.fences.push_back("fdem::fence");
-    const bool synced = sim.contact()->syncs() != syncs, built = sim.contact()->builds() != builds;
+    const bool updated = sim.contact()->list_updates() != updates;
+    const bool synced = sim.contact()->syncs() != syncs;
+    const bool built = sim.contact()->builds() != builds || sim.contact()->handover_checks() != checks;
+    out.update_steps += updated ? 1 : 0;
     Recorded& into = built ? out.build : synced ? out.recheck : out.quiet;
     ++(built ? out.build_steps : synced ? out.recheck_steps : out.quiet_steps);
     using List = std::vector<std::string> Recorded::*;
@@ -177,18 +183,63 @@ StepsRecord record_steps(Simulation<D>& sim, int n) {
   return out;
 }
 
+// Interfaces q with pick(q) failed (damage 1, as fdem_test::fail_all_interfaces), not handed over:
+// the force kernel flags them and the contact system hands them over at its next check.
+template <int D, class Pick>
+void fail_interfaces(Simulation<D>& sim, Pick pick) {
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  Kokkos::deep_copy(h, sim.m.ihist);
+  for (int q = 0; q < sim.m.ni; ++q)
+    if (pick(q))
+      for (int k = 0; k < D; ++k) store_point(h, q, k, CohesivePoint{1.0, 0.5, 1.0, 0.0});
+  Kokkos::deep_copy(sim.m.ihist, h);
+}
+
+// staged: half of the interfaces fail before the recording, the rest after its first 100 steps
+// (handovers during the recorded steps: local updates of the candidate lists)
 template <int D>
-void unsampled_steps_scene() {
+void unsampled_steps_scene(bool staged = false) {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 4 : 2);
-  Simulation<D> sim(pressed_case<D>(), mesh);
+  Case c = pressed_case<D>();
+  if (staged) c.contact.skin = 0.004;  // no rebuild by the displacement bound around the handover
+  Simulation<D> sim(c, mesh);
   ASSERT_NE(sim.contact(), nullptr);
-  fdem_test::fail_all_interfaces(sim);
+  if (staged) {
+    fail_interfaces(sim, [](int q) { return q % 2 == 0; });
+    sim.contact()->check_failures(sim.m);
+  } else {
+    fdem_test::fail_all_interfaces(sim);
+  }
   fdem_test::shake(sim, D == 2 ? 0.05 : 0.2);
   for (int s = 0; s < 20; ++s) sim.step(s % 10 == 0);  // warm-up: first build, sampled steps
   const long syncs0 = sim.contact()->syncs();
   const int n = 300;
-  const StepsRecord r = record_steps(sim, n);
-  const std::string what = std::to_string(D) + "D, " + std::to_string(n) + " unsampled steps";
+  StepsRecord r;
+  if (staged) {
+    const StepsRecord a = record_steps(sim, 100);
+    fail_interfaces(sim, [](int q) { return q % 2 == 1; });
+    const StepsRecord b = record_steps(sim, n - 100);
+    r = a;
+    for (auto [to, from] : {std::make_pair(&r.quiet, &b.quiet), std::make_pair(&r.recheck, &b.recheck),
+                            std::make_pair(&r.build, &b.build)}) {
+      using List = std::vector<std::string> Recorded::*;
+      for (List v : {&Recorded::fences, &Recorded::copies, &Recorded::host_reductions})
+        (to->*v).insert((to->*v).end(), (from->*v).begin(), (from->*v).end());
+      to->launches += from->launches;
+      to->device_reductions += from->device_reductions;
+      to->sync_copies += from->sync_copies;
+    }
+    r.quiet_steps += b.quiet_steps;
+    r.recheck_steps += b.recheck_steps;
+    r.build_steps += b.build_steps;
+    r.update_steps += b.update_steps;
+    EXPECT_GT(sim.contact()->handed_over(), sim.m.ni / 2);
+    EXPECT_GT(r.update_steps, 0) << D << "D: the handover should update the lists without a rebuild";
+  } else {
+    r = record_steps(sim, n);
+  }
+  const std::string what = std::to_string(D) + "D" + (staged ? " (staged failures), " : ", ") +
+                           std::to_string(n) + " unsampled steps";
   // the scene exercises what it should, and the hooks see the step's kernels
   EXPECT_GT(sim.contact()->active_contacts(), 0) << what << ": the fragments should touch";
   EXPECT_GT(r.build_steps, 0) << what << ": the candidate lists should be rebuilt";
@@ -211,13 +262,17 @@ void unsampled_steps_scene() {
   EXPECT_GT(r.quiet_steps, 2 * n / 3)
       << what << ": " << r.recheck_steps << " re-check steps, " << r.build_steps << " rebuilds";
   EXPECT_EQ(sim.contact()->stale_passes(), 0) << what << ": passes over outdated candidate lists";
-  std::printf("%s: %d quiet steps, %d re-check steps, %d rebuild steps; on these:%s%s%s\n", what.c_str(),
-              r.quiet_steps, r.recheck_steps, r.build_steps, list(r.build.fences).c_str(),
-              list(r.build.copies).c_str(), list(r.build.host_reductions).c_str());
+  std::printf(
+      "%s: %d quiet steps, %d re-check steps, %d rebuild or handover steps (%d list updates); on "
+      "these:%s%s%s\n",
+      what.c_str(), r.quiet_steps, r.recheck_steps, r.build_steps, r.update_steps,
+      list(r.build.fences).c_str(), list(r.build.copies).c_str(), list(r.build.host_reductions).c_str());
 }
 
 TEST(GpuReady, UnsampledStepsDoNotWaitForTheDevice2D) { unsampled_steps_scene<2>(); }
 TEST(GpuReady, UnsampledStepsDoNotWaitForTheDevice3D) { unsampled_steps_scene<3>(); }
+TEST(GpuReady, UnsampledStepsWithHandoversDoNotWaitForTheDevice2D) { unsampled_steps_scene<2>(true); }
+TEST(GpuReady, UnsampledStepsWithHandoversDoNotWaitForTheDevice3D) { unsampled_steps_scene<3>(true); }
 
 // The test can fail: the hooks see what a sampled step asks for (its clocks fence, the energies are
 // reductions into host values, the platen accumulators are copied to the host).

@@ -6,7 +6,8 @@
 // the candidates of a node are the faces whose bounding box, grown by the search distance, holds
 // the node. Stored as CSR by node id, each node's segment sorted (pair_order). Rebuilt only when
 // a node has moved more than half the skin since the last build (ContactSystem::update); the
-// contact history of the pairs that stay is carried over (transfer_history).
+// contact history of the pairs that stay is carried over (transfer_history). A handover of failed
+// interfaces updates the lists by a local search instead (kernels/contact/list_update.hpp).
 #include "kernels/contact/geometry.hpp"
 
 namespace fdem {
@@ -402,20 +403,6 @@ void transfer_history(const PairList<D>& from, const PairList<D>& to, const Kokk
             for (int k = 0; k < D; ++k) b.fs(j, k) = 0.0;
           }
         }
-      });
-}
-
-// Positions of the surface nodes at a build (for the Verlet test of ContactSystem::update).
-template <int D>
-void record_positions(const Kokkos::View<double* [D]>& x, const Kokkos::View<double* [D]>& xb,
-                      const Kokkos::View<int*>& points, int np) {
-  auto xx = x;
-  auto xbuild = xb;
-  auto pts = points;
-  Kokkos::parallel_for(
-      "fdem::contact::record", Kokkos::RangePolicy<ExecSpace>(0, np), KOKKOS_LAMBDA(const int i) {
-        const int s = pts(i);
-        for (int k = 0; k < D; ++k) xbuild(s, k) = xx(s, k);
       });
 }
 

@@ -233,7 +233,8 @@ void node_areas(const ContactSurface<D>& surf, int nn) {
 }
 
 // Hands every failed interface (damage 1 at all its points) that has parted or come apart over
-// to contact (m.icontact(q) = 1); ni: the number of interfaces. Returns how many.
+// to contact (m.icontact(q) = 1); ni: the number of interfaces. Returns how many. Clears the
+// force kernel's flag m.icontact_pending (by a kernel: no copy to the device).
 template <int D>
 int hand_over_failed(const Model<D>& m, int ni) {
   auto icontact = m.icontact;
@@ -264,6 +265,11 @@ int hand_over_failed(const Model<D>& m, int ni) {
         }
       },
       n);
+  auto pending = m.icontact_pending;
+  if (pending.data() != nullptr)
+    Kokkos::parallel_for(
+        "fdem::contact::pending_clear", Kokkos::RangePolicy<ExecSpace>(0, 1),
+        KOKKOS_LAMBDA(const int) { pending() = 0; });
   return n;
 }
 

@@ -62,9 +62,9 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   m.handover_slip = law.dpen;
   m.icontact_pending = Kokkos::View<int>(std::string(kContactSyncLabel) + "::icontact_pending");
   // Failed, parted interfaces are handed over every 25 steps (a failed interface keeps its
-  // compression penalty until then): each handover refreshes the surfaces and rebuilds the
-  // candidate lists (cost measured in docs/theory.md section 6b). On GPUs the check also costs a
-  // copy of the pending flag to the host.
+  // compression penalty until then): each handover refreshes the surfaces and updates the
+  // candidate lists by a local search (update_lists; docs/performance-impact.md section 2). On
+  // GPUs the check also costs a copy of the pending flag to the host.
   check_every_ = 25;
   refresh_surfaces(m);
 }
@@ -166,6 +166,15 @@ void ContactSystem<D>::allocate_work() {
   grid_.count = Kokkos::View<int*>("fdem::contact::cell_count", cell_cap_);
   grid_.offset = Kokkos::View<int*>("fdem::contact::cell_offset", cell_cap_ + 1);
   grid_.faces = Kokkos::View<int*>("fdem::contact::cell_faces", nf_);
+  tgrid_.count = Kokkos::View<int*>("fdem::contact::tcell_count", cell_cap_);
+  tgrid_.offset = Kokkos::View<int*>("fdem::contact::tcell_offset", cell_cap_ + 1);
+  tgrid_.faces = Kokkos::View<int*>("fdem::contact::tcell_faces", nf_);
+  before_.mark = Kokkos::View<int*>("fdem::contact::mark_before", nn_);
+  before_.clus = Kokkos::View<int*>("fdem::contact::clus_before", nn_);
+  before_.factive = Kokkos::View<int*>("fdem::contact::factive_before", nf_);
+  tnode_ = Kokkos::View<int*>("fdem::contact::tnode", nn_);
+  tface_ = Kokkos::View<int*>("fdem::contact::tface", nf_);
+  tlist_ = Kokkos::View<int*>("fdem::contact::tlist", nf_);
   for (PairList<D>* p : {&cur_, &next_}) p->off = Kokkos::View<int*>("fdem::contact::pair_off", nn_ + 1);
   pass_ = Kokkos::View<ContactSums>("fdem::contact::pass");
   status_ = Kokkos::View<ContactStatus>(std::string(kContactSyncLabel) + "::status");
@@ -192,13 +201,61 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
 template <int D>
 void ContactSystem<D>::check_failures(const Model<D>& m) {
   if (ni_ == 0) return;
-  const int n = hand_over_failed<D>(m, ni_);
-  Kokkos::deep_copy(m.icontact_pending, 0);
-  if (n > 0) {
-    handed_ += n;
-    may_meet_ = true;
-    refresh_surfaces(m);
-  }
+  const int n = hand_over_failed<D>(m, ni_);  // also clears m.icontact_pending
+  ++checks_;
+  if (n == 0) return;
+  handed_ += n;
+  // the lists are valid and the build positions known for every node: a local update will do
+  const bool lists = may_meet_ && !need_build_ && xb_all_ && builds_ > 0 && ns_ > 0 && na_ > 0;
+  if (lists) save_surfaces<D>(mark_, surf_, before_, nn_, nf_);
+  may_meet_ = true;
+  refresh_surfaces(m);
+  if (lists) update_lists(m);
+}
+
+template <int D>
+void ContactSystem<D>::update_lists(const Model<D>& m) {
+  const double half = 0.5 * skin;
+  // the pass of this step must not run on outdated lists (new surface nodes included)
+  const double d2 = largest_displacement2<D>(m.x, xb_, slaves_, ns_);
+  if (!(d2 <= half * half)) return;
+  touched<D>(mark_, surf_, before_, tnode_, tface_, nn_, nf_);
+  const int nt = compact_flagged("fdem::contact::touched_faces_list", tface_, tlist_, nf_);
+  LocalSearch<D> L;
+  L.S.x = xb_;
+  L.S.points = slaves_;
+  L.S.np = ns_;
+  L.S.fnode = surf_.fnode;
+  L.S.faces = afaces_;
+  L.S.nf = na_;
+  L.S.radius = radius;
+  L.S.tol = law.tol;
+  const ContactBox<D> box = search_bounds<D>(L.S);
+  bool finite = std::isfinite(box.ext);
+  for (int k = 0; k < D; ++k) finite = finite && std::isfinite(box.lo[k]) && std::isfinite(box.hi[k]);
+  if (!finite) return;
+  grid_geometry<D>(grid_, box, radius, cell_cap_);
+  grid_bin<D>(grid_, L.S);
+  tgrid_.geo = grid_.geo;
+  tgrid_.ncell = grid_.ncell;
+  SearchSet<D> T = L.S;
+  T.faces = tlist_;
+  T.nf = nt;
+  grid_bin<D>(tgrid_, T);
+  L.all = grid_;
+  L.touched = tgrid_;
+  L.tnode = tnode_;
+  L.tface = tface_;
+  const int total = local_count<D>(L, filter_, cur_, next_.off, nn_);
+  if (total > next_.capacity)
+    reserve_pairs(next_,
+                  static_cast<int>(std::min<long>(std::numeric_limits<int>::max(), 3L * total / 2 + 64)));
+  local_fill<D>(L, filter_, cur_, next_);
+  next_.size = total;
+  std::swap(cur_, next_);
+  need_build_ = false;
+  ++updates_;
+  until_recheck_ = 1;  // the next step re-checks the lists with the speeds of the new surface nodes
 }
 
 template <int D>
@@ -231,7 +288,8 @@ void ContactSystem<D>::build(const Model<D>& m) {
   next_.size = total;
   transfer_history<D>(cur_, next_, slaves_, ns_, filter_);
   std::swap(cur_, next_);
-  record_positions<D>(m.x, xb_, slaves_, ns_);
+  record_all_positions<D>(m.x, xb_, nn_);
+  xb_all_ = true;
   need_build_ = false;
   ++builds_;
 }
@@ -370,6 +428,8 @@ void ContactSystem<D>::save_state(StateArrays& s) const {
   s.put("contact/dissipated", st.dissipated);
   s.put_int("contact/active", static_cast<long long>(st.active));
   s.f64["contact/last_pass"] = {st.d2max, st.v2max, st.stale};
+  s.put_int("contact/xb_all", xb_all_ ? 1 : 0);
+  s.put_int("contact/list_updates", updates_);
   // for people reading the file (not read back)
   s.put_int("contact/surface_nodes", ns_);
   s.put_int("contact/active_faces", na_);
@@ -423,6 +483,10 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
     state_fields(*this, older);
     need_build_ = true;
   }
+  // checkpoints from before the local list updates hold build positions of surface nodes only:
+  // their next handover rebuilds
+  xb_all_ = s.has("contact/xb_all") && s.get_int("contact/xb_all") != 0;
+  updates_ = s.has("contact/list_updates") ? static_cast<long>(s.get_int("contact/list_updates")) : 0;
   auto h = Kokkos::create_mirror_view(status_);
   h() = st;
   Kokkos::deep_copy(status_, h);

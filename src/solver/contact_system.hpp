@@ -14,11 +14,18 @@
 // or an interface has failed.
 //
 // Broad phase: uniform cell grid + candidate lists, rebuilt only when a surface node has moved
-// more than half the skin since the last build. Narrow phase every step over the candidates.
+// more than half the skin since the last build. The lists are those of a search at the positions
+// of the last build (xb, kept for every node); a handover adds and removes the pairs of the new
+// and changed surfaces by a local search at xb (kernels/contact/list_update.hpp) instead of a
+// rebuild, unless a surface node is already beyond half the skin. Narrow phase every step over the
+// candidates.
 //
 // Synchronisation (GPU readiness): a step waits for the device only on the steps that re-check
 // something on the host; there the host reads one small device value, labelled kContactSyncLabel.
-// - The handover flag (set by the force kernel) every 25 steps while interfaces are left.
+// - The handover flag (set by the force kernel) every 25 steps while interfaces are left. A step
+//   that hands interfaces over waits for the device like a rebuild (counts, sizes); after a local
+//   update of the lists (no rebuild), the next step re-checks them (its status includes the new
+//   surface nodes).
 // - The status of the narrow phase (ContactStatus: totals and the largest displacement since the
 //   build and the largest speed) on the steps the candidate lists are re-checked. A check at step s
 //   sees the pass of step s - 1 (displacement d, speed v): the lists are rebuilt when
@@ -89,6 +96,8 @@ class ContactSystem {
   int candidates() const { return cur_.size; }
   int active_contacts() const;  // in the last pass (reads the device status)
   long builds() const { return builds_; }
+  // Handovers that updated the candidate lists by a local search instead of a rebuild.
+  long list_updates() const { return updates_; }
   // Host reads of device values during update() so far (the re-check steps), and passes over
   // candidate lists that were outdated (reads the device status; 0 unless the speeds grew by more
   // than the margin of the re-check schedule).
@@ -100,12 +109,15 @@ class ContactSystem {
   // ever be part of: outer boundary and both faces of interfaces; host).
   const std::vector<double>& potential_area() const { return potential_area_; }
   long handed_over() const { return handed_; }
+  // Handover checks that found the flag set (the step waits for the device: counts, sizes).
+  long handover_checks() const { return checks_; }
   int bodies() const { return bodies_; }
 
   // Device data (read by tests).
   const PairList<D>& pairs() const { return cur_; }
   const Kokkos::View<int*>& surface_node_list() const { return slaves_; }
   const ContactSurface<D>& surface() const { return surf_; }
+  const Kokkos::View<double* [D]>& build_positions() const { return xb_; }
 
   // Checkpoint: everything that changes during a run (pair lists with their history, positions at
   // the last build, node contact areas, counters), under "contact/". load_state needs the model's
@@ -127,6 +139,10 @@ class ContactSystem {
   void allocate_work();
   // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
   void refresh_surfaces(const Model<D>& m);
+  // After a handover (surfaces refreshed; before_: the surfaces of the lists): the lists updated by
+  // a local search at the build positions, when every surface node is within half the skin of its
+  // build position (else need_build_ stays set).
+  void update_lists(const Model<D>& m);
   // Room for `cap` candidate pairs in P and in the narrow phase's scratch (which only grows).
   void reserve_pairs(PairList<D>& P, int cap);
   // The checkpoint fields other than the pair lists (save_state and load_state visit the same
@@ -145,14 +161,18 @@ class ContactSystem {
   long cell_cap_ = 0;
   PairList<D> cur_, next_;
   PairScratch<D> scratch_;
-  Kokkos::View<double* [D]> xb_;           // positions at the last build
+  Kokkos::View<double* [D]> xb_;  // positions at the last build (every node)
+  bool xb_all_ = false;           // xb_ holds every node (false: restored from a checkpoint before this rule)
+  SurfacesBefore before_;         // surfaces of the lists, at a handover
+  Kokkos::View<int*> tnode_, tface_, tlist_;  // touched nodes and faces (list_update.hpp)
+  CellGrid<D> tgrid_;                         // grid of the touched faces
   bool may_meet_ = false, need_build_ = true;
   bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int until_recheck_ = 0;  // steps to the next re-check of the candidate lists (0: this step)
   double stale_seen_ = 0;  // stale passes at the last re-check
-  long builds_ = 0, handed_ = 0, surface_version_ = 0, syncs_ = 0;
+  long builds_ = 0, handed_ = 0, surface_version_ = 0, syncs_ = 0, updates_ = 0, checks_ = 0;
   std::vector<double> potential_area_;
   Scatter own_scatter_;  // update() without a scatter view
   size_t own_scatter_size_ = 0;

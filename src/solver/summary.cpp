@@ -123,6 +123,7 @@ nlohmann::json contact_report(ContactSystem<D>& ct) {
           {"candidate_pairs", ct.candidates()},
           {"active_contacts", ct.active_contacts()},
           {"grid_builds", ct.builds()},
+          {"list_updates", ct.list_updates()},
           {"stable_step_s", ct.stable_step()}};
 }
 

@@ -1,0 +1,190 @@
+// Candidate lists of contact across handovers (kernels/contact/list_update.hpp): a handover of
+// failed interfaces updates the lists by a local search at the build positions instead of a
+// rebuild; the result must be the list a full search at those positions gives, with the history
+// of every pair that stays.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <utility>
+#include <vector>
+
+#include "scenes.hpp"
+#include "solver/simulation.hpp"
+#include "solver_fixtures.hpp"
+
+namespace {
+
+using namespace fdem;
+
+template <int D>
+HostMesh cracked_block(int n) {
+  HostMesh m = D == 2 ? generate_crossed_rectangle(0, 0, 0.04, 0.04, n, n, "body")
+                      : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
+  insert_interfaces(m, {true});
+  return m;
+}
+
+// A cracked block on a fixed base under gravity, pressed by a friction platen from above; skin:
+// the Verlet skin (large: no rebuild by the displacement bound over the test).
+template <int D>
+Case pressed_case(double skin) {
+  auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
+  c.interface_materials = {fdem_test::strong_interface(2e7 / 0.01, 0.8e7 / 0.01)};
+  c.fracture_material = 0;
+  c.contact.enabled = 1;
+  c.contact.friction = 0.5;
+  c.contact.skin = skin;
+  VelocityBC fix;
+  fix.set = D == 2 ? "ymin" : "zmin";
+  fix.active = {true, true, true};
+  c.velocity_bcs = {fix};
+  c.gravity = {0, 0, 0};
+  c.gravity[D - 1] = -9.81;
+  PlatenSpec p;
+  p.name = "top";
+  p.point[D - 1] = 0.0401;
+  p.normal[D - 1] = -1.0;
+  p.velocity[D - 1] = -0.05;
+  p.friction = 0.3;
+  c.platens = {p};
+  return c;
+}
+
+// Interfaces q with pick(q) failed (damage 1, as fdem_test::fail_all_interfaces), not handed over.
+template <int D, class Pick>
+void fail_interfaces(Simulation<D>& sim, Pick pick) {
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  Kokkos::deep_copy(h, sim.m.ihist);
+  for (int q = 0; q < sim.m.ni; ++q)
+    if (pick(q))
+      for (int k = 0; k < D; ++k) store_point(h, q, k, CohesivePoint{1.0, 0.5, 1.0, 0.0});
+  Kokkos::deep_copy(sim.m.ihist, h);
+}
+
+// A host copy of the candidate lists: per node, face -> history (fn, ac, g0, fs).
+using PairMap = std::map<std::pair<int, int>, std::vector<double>>;
+template <int D>
+PairMap host_pairs(const ContactSystem<D>& ct, int nn) {
+  const PairList<D>& P = ct.pairs();
+  auto off = fdem_test::host_view(P.off);
+  auto face = fdem_test::host_view(P.face);
+  auto fn = fdem_test::host_view(P.fn);
+  auto ac = fdem_test::host_view(P.ac);
+  auto g0 = fdem_test::host_view(P.g0);
+  auto fs = fdem_test::host_view(P.fs);
+  PairMap out;
+  for (int s = 0; s < nn; ++s)
+    for (int j = off(s); j < off(s + 1); ++j) {
+      std::vector<double> h = {fn(j), ac(j), g0(j)};
+      for (int k = 0; k < D; ++k) h.push_back(fs(j, k));
+      out[{s, face(j)}] = h;
+    }
+  return out;
+}
+
+template <int D>
+void local_update_test() {
+  const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
+  Simulation<D> sim(pressed_case<D>(0.004), mesh);
+  ContactSystem<D>* ct = sim.contact();
+  ASSERT_NE(ct, nullptr);
+  // a third of the interfaces fail first: pieces in contact, lists built, contacts with history
+  fail_interfaces(sim, [](int q) { return q % 3 == 0; });
+  ct->check_failures(sim.m);
+  fdem_test::shake(sim, 0.2);
+  for (int s = 0; s < 60; ++s) sim.step(s % 20 == 0);
+  const long builds = ct->builds();
+  ASSERT_GE(builds, 1);
+  ASSERT_EQ(ct->list_updates(), 0);
+  const int ns_before = ct->surface_nodes();
+  const PairMap before = host_pairs(*ct, sim.m.nn);
+  int touching = 0;
+  for (const auto& [key, h] : before) touching += h[0] > 0.0 ? 1 : 0;
+  ASSERT_GT(touching, 0) << "the pieces should touch";
+
+  // another third fails: a local update, no rebuild
+  fail_interfaces(sim, [](int q) { return q % 3 == 1; });
+  ct->check_failures(sim.m);
+  EXPECT_EQ(ct->builds(), builds);
+  EXPECT_EQ(ct->list_updates(), 1);
+  EXPECT_GT(ct->surface_nodes(), ns_before);
+  const PairMap updated = host_pairs(*ct, sim.m.nn);
+  EXPECT_GT(updated.size(), before.size());
+
+  // every pair that stays keeps its history, bit for bit; new pairs start without history
+  int kept = 0, kept_touching = 0;
+  for (const auto& [key, h] : updated) {
+    const auto it = before.find(key);
+    if (it == before.end()) {
+      for (double v : h) EXPECT_EQ(v, 0.0);
+      continue;
+    }
+    ++kept;
+    kept_touching += h[0] > 0.0 ? 1 : 0;
+    EXPECT_EQ(h, it->second) << "node " << key.first << ", face " << key.second;
+  }
+  EXPECT_GT(kept, 0);
+  EXPECT_EQ(kept_touching, touching);
+
+  // the same pairs as a full search at the build positions
+  auto x = Kokkos::create_mirror(sim.m.x);  // copies (create_mirror_view would alias on the host)
+  Kokkos::deep_copy(x, sim.m.x);
+  auto xb = Kokkos::create_mirror(ct->build_positions());
+  Kokkos::deep_copy(xb, ct->build_positions());
+  auto xmove = Kokkos::create_mirror(sim.m.x);
+  double moved = 0;
+  for (int i = 0; i < sim.m.nn; ++i)
+    for (int k = 0; k < D; ++k) {
+      xmove(i, k) = xb(i, k);
+      moved = std::max(moved, std::abs(x(i, k) - xb(i, k)));
+    }
+  EXPECT_GT(moved, 0.0) << "the nodes should have moved since the build";
+  Kokkos::deep_copy(sim.m.x, xmove);
+  ct->build(sim.m);
+  const PairMap full = host_pairs(*ct, sim.m.nn);
+  Kokkos::deep_copy(sim.m.x, x);
+  EXPECT_EQ(full.size(), updated.size());
+  int missing = 0, extra = 0;
+  for (const auto& [key, h] : full) missing += updated.count(key) ? 0 : 1;
+  for (const auto& [key, h] : updated) extra += full.count(key) ? 0 : 1;
+  EXPECT_EQ(missing, 0) << "pairs of the full search that the local update missed";
+  EXPECT_EQ(extra, 0) << "pairs of the local update that the full search does not have";
+  ct->build(sim.m);  // back to a build at the current positions
+
+  // the rest fails while the run goes on (handed over as they part): updates, no rebuild, passes on
+  // up-to-date lists only
+  const long handed = ct->handed_over(), builds2 = ct->builds();
+  fail_interfaces(sim, [](int q) { return q % 3 == 2; });
+  for (int s = 0; s < 60; ++s) sim.step(s % 20 == 0);
+  EXPECT_GT(ct->handed_over(), handed);
+  EXPECT_GE(ct->list_updates(), 2);
+  EXPECT_EQ(ct->builds(), builds2);
+  EXPECT_EQ(ct->stale_passes(), 0);
+  EXPECT_GT(ct->active_contacts(), 0);
+}
+
+TEST(ContactLists, HandoverUpdatesTheListsAsAFullSearchAtTheBuildPositions2D) { local_update_test<2>(); }
+TEST(ContactLists, HandoverUpdatesTheListsAsAFullSearchAtTheBuildPositions3D) { local_update_test<3>(); }
+
+// A handover when a surface node is already beyond half the skin from its build position rebuilds.
+TEST(ContactLists, HandoverBeyondTheSkinRebuilds) {
+  const HostMesh mesh = cracked_block<2>(4);
+  Simulation<2> sim(pressed_case<2>(0.004), mesh);
+  ContactSystem<2>* ct = sim.contact();
+  fail_interfaces(sim, [](int q) { return q % 2 == 0; });
+  ct->check_failures(sim.m);
+  for (int s = 0; s < 5; ++s) sim.step(false);
+  const long builds = ct->builds();
+  auto x = Kokkos::create_mirror_view(sim.m.x);
+  Kokkos::deep_copy(x, sim.m.x);
+  for (int i = 0; i < sim.m.nn; ++i) x(i, 0) += 0.6 * ct->skin;  // a rigid shift beyond half the skin
+  Kokkos::deep_copy(sim.m.x, x);
+  fail_interfaces(sim, [](int q) { return q % 2 == 1; });
+  ct->check_failures(sim.m);
+  EXPECT_EQ(ct->list_updates(), 0);
+  sim.step(false);
+  EXPECT_EQ(ct->builds(), builds + 1);
+  EXPECT_EQ(ct->stale_passes(), 0);
+}
+
+}  // namespace
