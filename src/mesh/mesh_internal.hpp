@@ -2,6 +2,7 @@
 // Helpers shared by the files of the mesh module (not part of its public interface).
 #include <array>
 #include <cstddef>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +62,17 @@ struct Extracted {
 // Turn the current Gmsh model's mesh into a HostMesh (call inside a Gmsh session). Does not check
 // element orientation. Throws InputError naming `source`.
 Extracted extract_model(int dim, const std::string& source);
+
+// Gmsh in a child process, the transport (gmsh_child.cpp): an Extracted appended to `b` as bytes
+// and read back; a pipe written / read to the end; the last lines of the child's captured output;
+// the child's address space capped at the memory available; the name of a signal.
+void pack(std::string& b, const Extracted& ex);
+Extracted unpack(const std::string& b);
+void write_all(int fd, const std::string& b);
+std::string read_all(int fd);
+std::string log_excerpt(std::FILE* log);
+void cap_address_space();
+std::string signal_name(int sig);
 
 // Format a double compactly (like %g with 6 significant digits).
 std::string fmt(double v);
