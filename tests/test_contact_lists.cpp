@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -186,5 +187,64 @@ TEST(ContactLists, HandoverBeyondTheSkinRebuilds) {
   EXPECT_EQ(ct->builds(), builds + 1);
   EXPECT_EQ(ct->stale_passes(), 0);
 }
+
+// The narrow phase visits only the pairs that can matter (kernels/contact/narrow_phase.hpp,
+// PairSubset): so a skin 400 times smaller (many rebuilds, a fraction of the candidates) and
+// subsets that overflow (1 pair per node, then all candidates) must give the same run, bit for
+// bit, as a large skin that never rebuilds: positions, velocities, contact energies, histories.
+template <int D>
+void narrow_phase_exact_test() {
+  const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
+  auto run = [&](double skin, bool small) {
+    auto sim = std::make_unique<Simulation<D>>(pressed_case<D>(skin), mesh);
+    ContactSystem<D>* ct = sim->contact();
+    ct->small_subsets = small;
+    fail_interfaces(*sim, [](int q) { return q % 2 == 0; });
+    ct->check_failures(sim->m);
+    fdem_test::shake(*sim, 0.2);
+    for (int s = 0; s < 150; ++s) sim->step(s % 25 == 0);
+    return sim;
+  };
+  const auto ref = run(0.004, false), fine = run(1e-5, false), over = run(0.004, true);
+  const ContactSystem<D>& c0 = *ref->contact();
+  const ContactSystem<D>& c1 = *fine->contact();
+  const ContactSystem<D>& c2 = *over->contact();
+  EXPECT_EQ(c0.builds(), 1);
+  EXPECT_GE(c1.builds(), 4) << "the small skin should rebuild the lists several times";
+  // fewer candidates in 2D; on this coarse 3D block the grown face boxes hold the same pairs
+  EXPECT_LE(c1.candidates(), c0.candidates());
+  if (D == 2) {
+    EXPECT_LT(c1.candidates(), c0.candidates());
+  }
+  EXPECT_EQ(c1.stale_passes(), 0);
+  ASSERT_GT(c0.active_contacts(), 0);
+  // nodes with more than one contact: their subsets overflow in the third run
+  int crowded = 0;
+  {
+    auto off = fdem_test::host_view(c0.pairs().off);
+    auto fn = fdem_test::host_view(c0.pairs().fn);
+    for (int s = 0; s < ref->m.nn; ++s) {
+      int n = 0;
+      for (int j = off(s); j < off(s + 1); ++j) n += fn(j) > 0.0 ? 1 : 0;
+      crowded += n > 1 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(crowded, 0);
+  const auto x0 = fdem_test::host_view(ref->m.x), v0 = fdem_test::host_view(ref->m.v);
+  for (Simulation<D>* other : {fine.get(), over.get()}) {
+    const auto x = fdem_test::host_view(other->m.x), v = fdem_test::host_view(other->m.v);
+    int differ = 0;
+    for (int i = 0; i < ref->m.nn; ++i)
+      for (int k = 0; k < D; ++k) differ += x(i, k) != x0(i, k) || v(i, k) != v0(i, k) ? 1 : 0;
+    EXPECT_EQ(differ, 0);
+    EXPECT_EQ(other->contact()->active_contacts(), c0.active_contacts());
+    EXPECT_EQ(other->contact()->elastic_energy(), c0.elastic_energy());
+    EXPECT_EQ(other->contact()->dissipated(), c0.dissipated());
+  }
+  EXPECT_EQ(host_pairs(c2, over->m.nn), host_pairs(c0, ref->m.nn));
+}
+
+TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets2D) { narrow_phase_exact_test<2>(); }
+TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets3D) { narrow_phase_exact_test<3>(); }
 
 }  // namespace

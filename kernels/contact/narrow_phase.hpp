@@ -105,20 +105,6 @@ KOKKOS_INLINE_FUNCTION bool same_piece(const ContactSurface<D>& S, int fa, int f
   return false;
 }
 
-// The largest contact energy of node s at the last step with a face related to face fc (of the
-// same piece, see same_piece), as depth(j) = depth * sqrt(effective area) = sqrt(2 U / K_n) (-1:
-// not in contact): a contact with fc of effective area A can take over the depth
-// related_depth / sqrt(A), the one at which it stores that energy (see contact_pair). 0 when there
-// is none.
-template <int D>
-KOKKOS_INLINE_FUNCTION double related_depth(const ContactSurface<D>& S, const Kokkos::View<int*>& pface,
-                                            const Kokkos::View<double*>& depth, int b, int e, int fc) {
-  double d = 0.0;
-  for (int jj = b; jj < e; ++jj)
-    if (depth(jj) > d && same_piece<D>(S, fc, pface(jj))) d = depth(jj);
-  return d;
-}
-
 // Results of one narrow-phase pass (a reduction type): energy dissipated by the slip of the shear
 // springs and released when a contact opens, number of active contacts (sums); largest squared
 // displacement of a surface node since the last build and largest squared speed (maxima), for the
@@ -244,12 +230,35 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
   sums.active += 1.0;
 }
 
+// The candidates of one surface node that the passes after weigh visit: the pairs that may carry
+// a weight or a history (a near face, a free element, a contact at the last step or an allowance
+// g0 < 0), listed by weigh (Cap at most; a node with more visits all its candidates, with the same
+// sums). The others, most of the candidates (a face in front of the node by dpen or more, or
+// beyond dpen and not a free element's, with nothing stored), get no weight, release nothing and
+// have nothing to update, so skipping them changes no sum.
+inline constexpr int kSubsetCap = 48;
+template <int Cap>
+struct PairSubset {
+  static constexpr int kList = Cap;
+  int j[kList];
+  int n = 0;  // listed pairs (> kList: all of b..e are visited)
+  int b = 0, e = 0;
+  KOKKOS_INLINE_FUNCTION void add(int jj) {
+    if (n < kList) j[n] = jj;
+    ++n;
+  }
+  KOKKOS_INLINE_FUNCTION int count() const { return n <= kList ? n : e - b; }
+  KOKKOS_INLINE_FUNCTION int operator[](int t) const { return n <= kList ? j[t] : b + t; }
+};
+
 // The narrow-phase pass over one surface node's candidates (see contact_forces): the weight of
 // every pair (weigh, share), what the weight changes release (release), then the contacts.
 // Scratch per pair: g gap, phi fade (< 0: a free element's face), n normal, w weight, depth the
-// depth at the last step, rel the energy released.
-template <int D, bool Fric>
+// depth at the last step, rel the energy released (written for the pairs of the node's
+// PairSubset only, for all its candidates when the subset overflows).
+template <int D, bool Fric, int Cap = kSubsetCap>
 struct ContactForcesFn {
+  using Subset = PairSubset<Cap>;
   Kokkos::View<double* [D]> x, v, xbuild;
   ForceScatter<D> scatter;
   Kokkos::View<int*> pts;
@@ -274,34 +283,51 @@ struct ContactForcesFn {
     const int b = P.off(s), e = P.off(s + 1);
     if (b == e) return;
     const double Anode = S.narea(s);
-    weigh(s, b, e, xs);
-    share(b, e);
-    release(b, e, Anode);
-    contacts(f, s, b, e, xs, vs, Anode, sums);
+    Subset sub;
+    sub.b = b;
+    sub.e = e;
+    weigh<false>(s, b, e, xs, sub);
+    if (sub.n > Cap) {  // overflow: the later passes visit every pair, so every pair gets its scratch
+      sub.n = 0;
+      weigh<true>(s, b, e, xs, sub);
+    }
+    share(sub);
+    release(sub, Anode);
+    contacts(f, s, sub, xs, vs, Anode, sums);
   }
 
-  // 0. the depth of each contact at the last step (for the allowance of contacts that start)
-  // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's).
+  // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's), with the
+  //    depth of each contact at the last step (for the allowance of contacts that start).
   //    Free elements (a node's candidates are sorted by element: the depth is computed
   //    once per element): weight 1 through the nearest face when the node is inside. Other
   //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
-  KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D]) const {
-    for (int j = b; j < e; ++j)
-      scr.depth(j) = P.fn(j) > 0.0 ? P.fn(j) / (L.kn * kmath::sqrt(P.ac(j))) : -1.0;
+  //    The pairs the later passes visit go to sub; All: every pair gets its scratch (the others
+  //    weight 0, no fade, no depth), for a node whose subset overflows.
+  template <bool All>
+  KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D], Subset& sub) const {
     int last_e = -1, last_a = -1;
     double last_d = 0.0;
     for (int j = b; j < e; ++j) {
+      const double fn = P.fn(j);
+      const bool hist = fn > 0.0 || P.g0(j) < 0.0;
       const int fc = P.face(j);
-      const int own = S.fowner(fc);
       double n[D], N[D], wv[D];  // normal, barycentric coordinates, offset from the face
       const double g = face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);
-      scr.g(j) = g;
-      const bool near = g > -L.dpen && g < L.dpen;
-      if (!near && !S.efree(own)) {  // most candidates: no weight, nothing more to compute
-        scr.phi(j) = 0.0;
+      // in front of the face by dpen or more: not near, and outside the face's element (no
+      // weight when that is a free element either); most candidates end here
+      if (!hist && !(g < L.dpen)) {
+        if (All) none(j, g);
         continue;
       }
-      if (S.efree(own)) {  // a free element: contact through its nearest face, if inside
+      const int own = S.fowner(fc);
+      const bool near = g > -L.dpen && g < L.dpen;
+      const bool fr = S.efree(own);
+      if (!near && !fr && !hist) {
+        if (All) none(j, g);
+        continue;
+      }
+      double w = 0.0;
+      if (fr) {  // a free element: contact through its nearest face, if inside
         if (own != last_e) {
           last_e = own;
           const ElementDepth ed = element_depth<D>(S, own, xs);
@@ -310,8 +336,18 @@ struct ContactForcesFn {
         }
         bool mine = last_d > 0.0 && last_d < L.dpen;
         for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
-        scr.w(j) = mine ? 1.0 : 0.0;
-        scr.phi(j) = -1.0;
+        if (!mine && !hist) {
+          if (All) none(j, g);
+          continue;
+        }
+        w = mine ? 1.0 : 0.0;
+      }
+      sub.add(j);
+      scr.depth(j) = fn > 0.0 ? fn / (L.kn * kmath::sqrt(P.ac(j))) : -1.0;
+      scr.g(j) = g;
+      scr.w(j) = w;
+      if (fr || !near) {  // a free element's weight, or no weight (only the history to update)
+        scr.phi(j) = fr ? -1.0 : 0.0;
         continue;
       }
       face_bary_geo<D>(S.fgeo, S.fslot(fc), wv, N);
@@ -324,34 +360,42 @@ struct ContactForcesFn {
     }
   }
 
+  // the scratch of a pair outside the subset: no weight, no fade, no contact at the last step
+  KOKKOS_INLINE_FUNCTION void none(int j, double g) const {
+    scr.depth(j) = -1.0;
+    scr.g(j) = g;
+    scr.w(j) = 0.0;
+    scr.phi(j) = 0.0;
+  }
+
   // 2. the other faces: each penetrated near face is a contact, its weight shared among the near
   //    coplanar faces of its piece. The near faces (phi > 0, a few per node) are listed first,
   //    so that the pass is linear in the candidates and quadratic only in the near faces (kNear
   //    of them at most in the list; a node with more takes the direct loop, same sums).
   static constexpr int kNear = 32;
-  KOKKOS_INLINE_FUNCTION void share(int b, int e) const {
+  KOKKOS_INLINE_FUNCTION void share(const Subset& sub) const {
     int near[kNear];
     int nnear = 0;
-    for (int j = b; j < e && nnear <= kNear; ++j)
+    const int cnt = sub.count();
+    for (int t = 0; t < cnt && nnear <= kNear; ++t) {
+      const int j = sub[t];
       if (scr.phi(j) > 0.0) {
         if (nnear < kNear) near[nnear] = j;
         ++nnear;
       }
+    }
     const bool listed = nnear <= kNear;
-    for (int j = b; j < e; ++j) {
-      if (scr.phi(j) < 0.0) continue;
-      double w = 0.0;
-      if (scr.g(j) < 0.0 && scr.phi(j) > 0.0) {
-        double sum = 0;
-        if (listed) {
-          for (int t = 0; t < nnear; ++t) sum += share_term(j, near[t]);
-        } else {
-          for (int jj = b; jj < e; ++jj)
-            if (scr.phi(jj) > 0.0) sum += share_term(j, jj);
-        }
-        w = scr.phi(j) / (sum > 1.0 ? sum : 1.0);
+    for (int t = 0; t < cnt; ++t) {
+      const int j = sub[t];
+      if (!(scr.g(j) < 0.0 && scr.phi(j) > 0.0)) continue;  // w stays as weigh left it
+      double sum = 0;
+      if (listed) {
+        for (int u = 0; u < nnear; ++u) sum += share_term(j, near[u]);
+      } else {
+        for (int u = 0; u < cnt; ++u)
+          if (scr.phi(sub[u]) > 0.0) sum += share_term(j, sub[u]);
       }
-      scr.w(j) = w;
+      scr.w(j) = scr.phi(j) / (sum > 1.0 ? sum : 1.0);
     }
   }
   // near face jj's part of the weight sum of penetrated face j: its fade when it is j itself, or
@@ -366,45 +410,67 @@ struct ContactForcesFn {
   }
 
   // 3. what the weight changes release (the budget of rising ones, step 4)
-  KOKKOS_INLINE_FUNCTION void release(int b, int e, double Anode) const {
-    for (int j = b; j < e; ++j) {
+  KOKKOS_INLINE_FUNCTION void release(const Subset& sub, double Anode) const {
+    const int cnt = sub.count();
+    for (int t = 0; t < cnt; ++t) {
+      const int j = sub[t];
       const double ge = scr.g(j) - P.g0(j), Aw = Anode * scr.w(j);
       scr.rel(j) =
           P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
     }
   }
 
+  // The largest contact energy of the node at the last step with a face related to face fc (of
+  // the same piece, see same_piece), as depth(j) = depth * sqrt(effective area) = sqrt(2 U / K_n)
+  // (-1: not in contact): a contact with fc of effective area A can take over the depth
+  // related / sqrt(A), the one at which it stores that energy (see contact_pair). 0 when there is
+  // none. Over the pairs of sub: the others had no contact.
+  KOKKOS_INLINE_FUNCTION double related(const Subset& sub, int fc) const {
+    double d = 0.0;
+    const int cnt = sub.count();
+    for (int t = 0; t < cnt; ++t) {
+      const int jj = sub[t];
+      if (scr.depth(jj) > d && same_piece<D>(S, fc, P.face(jj))) d = scr.depth(jj);
+    }
+    return d;
+  }
+
   // 4. the contacts; the energy a contact released as its weight fell may go to a related one
   //    whose weight rises (a node moving from one face of a piece onto the next)
   template <class Force>
-  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, int b, int e, const double (&xs)[D],
+  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const double (&xs)[D],
                                        const double (&vs)[D], double Anode, ContactSums& sums) const {
     // the pairs that release energy (rel > 0: contacts whose weight fell, a few per node), listed
     // as in share so that the budgets cost the releasing pairs, not all candidates
     int relj[kNear];
     int nrel = 0;
-    for (int j = b; j < e && nrel <= kNear; ++j)
+    const int cnt = sub.count();
+    for (int t = 0; t < cnt && nrel <= kNear; ++t) {
+      const int j = sub[t];
       if (scr.rel(j) > 0.0) {
         if (nrel < kNear) relj[nrel] = j;
         ++nrel;
       }
+    }
     const bool listed = nrel <= kNear;
-    for (int j = b; j < e; ++j) {
+    for (int t = 0; t < cnt; ++t) {
+      const int j = sub[t];
       const int fc = P.face(j);
       const double w = scr.w(j);
-      const double lim = w > 0.0 && !(scr.depth(j) >= 0.0)
-                             ? related_depth<D>(S, P.face, scr.depth, b, e, fc) / kmath::sqrt(Anode * w)
-                             : 0.0;
+      if (!(w > 0.0) && !(P.fn(j) > 0.0) && !(P.g0(j) < 0.0)) continue;  // as contact_pair: nothing to do
+      const double lim = w > 0.0 && !(scr.depth(j) >= 0.0) ? related(sub, fc) / kmath::sqrt(Anode * w) : 0.0;
       double budget = 0.0;
       if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j) && nrel > 0) {
         if (listed) {
-          for (int t = 0; t < nrel; ++t) {
-            const int jj = relj[t];
+          for (int u = 0; u < nrel; ++u) {
+            const int jj = relj[u];
             if (jj != j && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
           }
         } else {
-          for (int jj = b; jj < e; ++jj)
+          for (int u = 0; u < cnt; ++u) {
+            const int jj = sub[u];
             if (jj != j && scr.rel(jj) > 0.0 && same_piece<D>(S, fc, P.face(jj))) budget += scr.rel(jj);
+          }
         }
       }
       contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
@@ -428,13 +494,14 @@ struct ContactForcesFn {
 // copies on host backends, so that the sums do not depend on the order the threads add in and a
 // run with T threads repeats itself bit for bit; atomics on GPUs).
 // The sums go to `pass` (device memory: no wait for the host; ContactSystem::update reads them
-// through contact_account).
-template <int D, bool Fric = true>
+// through contact_account). Cap: the capacity of a node's PairSubset (the tests take a small one
+// to check that the overflow path gives the same sums).
+template <int D, bool Fric = true, int Cap = kSubsetCap>
 void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np, const PairList<D>& P,
                     const PairScratch<D>& scratch, const ContactSurface<D>& surf, const ContactLaw& law,
                     double dt, const Kokkos::View<double* [D]>& xb, const ForceScatter<D>& sf,
                     const Kokkos::View<ContactSums>& pass) {
-  const ContactForcesFn<D, Fric> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt};
+  const ContactForcesFn<D, Fric, Cap> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt};
   Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace>(0, np), fn, pass);
 }
 

@@ -21,7 +21,8 @@
 // candidates.
 //
 // Synchronisation (GPU readiness): a step waits for the device only on the steps that re-check
-// something on the host; there the host reads one small device value, labelled kContactSyncLabel.
+// something on the host; there the host reads one small device value, labelled kContactSyncLabel
+// (two on a step that both polls the handover flag and re-checks the lists).
 // - The handover flag (set by the force kernel) every 25 steps while interfaces are left. A step
 //   that hands interfaces over waits for the device like a rebuild (counts, sizes); after a local
 //   update of the lists (no rebuild), the next step re-checks them (its status includes the new
@@ -86,6 +87,9 @@ class ContactSystem {
   // Frictionless contact (law.mu = 0, law.coh = 0) computes and stores no shear springs (same
   // results; off only for the tests and benchmarks that show it).
   bool skip_frictionless = true;
+  // Tests: subsets of 1 pair per node in the narrow phase (kernels/contact/narrow_phase.hpp,
+  // PairSubset), so that nodes with more relevant pairs take the overflow path (same results).
+  bool small_subsets = false;
   double skin = 0;       // Verlet skin (m)
   double radius = 0;     // search distance = law.dpen + skin
 
