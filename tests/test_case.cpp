@@ -863,7 +863,7 @@ TEST(CaseDefaults, RunCaseJsonShowsDerivedStiffness) {
       EXPECT_DOUBLE_EQ(j["ks"].get<double>(), ks) << name;
     }
     EXPECT_DOUBLE_EQ(r["contact"]["friction"].get<double>(), fractured ? std::tan(30 * kPi / 180) : 0.0);
-    EXPECT_NEAR(r["contact"]["skin"].get<double>(), 0.1 * h, 1e-12 * h) << name;
+    EXPECT_NEAR(r["contact"]["skin"].get<double>(), 0.02 * h, 1e-12 * h) << name;
 
     const Case again = fdem::load_case(opt.out_dir + "/case.json");
     EXPECT_EQ(again.platens[0].kn, r["platens"][0]["kn"].get<double>()) << name;

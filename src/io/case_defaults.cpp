@@ -72,7 +72,10 @@ void resolve_defaults(Case& c, const HostMesh& mesh) {
   if (unset(ct.kn)) show(doc, "kn", ct.kn = d.kn);
   if (unset(ct.ks)) show(doc, "ks", ct.ks = ct.kn * d.ks_ratio);
   if (ct.friction < 0) show(doc, "friction", ct.friction = default_contact_friction(c));
-  if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.1 * mesh_quality(mesh).mean_size);
+  // skin: 2 % of the mean element size (docs/performance-impact.md, "Skin"): the narrow phase costs
+  // in proportion to the candidates, which grow with the search distance dpen + skin, and a
+  // rebuild costs a few narrow-phase passes; the results do not depend on it
+  if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.02 * mesh_quality(mesh).mean_size);
 }
 
 }  // namespace fdem
