@@ -1,6 +1,6 @@
 #pragma once
 // Coulomb friction of an incremental shear spring (docs/theory.md sections 6 and 6b): the one law
-// of the node-to-face contacts (contact_pair, kernels/contact/narrow_phase.hpp) and of the rigid
+// of the node-to-face contacts (contact_pair, kernels/contact/contact_pair.hpp) and of the rigid
 // platens (apply_platens, kernels/platens.hpp).
 #include "kernels/fdem_kokkos.hpp"
 

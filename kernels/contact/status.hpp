@@ -1,8 +1,8 @@
 #pragma once
 // The contact system's running totals on the device: the narrow phase's sums of each pass
-// (ContactSums, kernels/contact/narrow_phase.hpp) added up in step order without a host
+// (ContactSums, kernels/contact/contact_pair.hpp) added up in step order without a host
 // reduction, so that an unsampled step does not wait for the device (ContactSystem::update).
-#include "kernels/contact/narrow_phase.hpp"
+#include "kernels/contact/contact_pair.hpp"
 
 namespace fdem {
 

@@ -347,14 +347,9 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   const bool fric = law.mu != 0.0 || law.coh != 0.0;
   const bool full = !skip_frictionless || fric || friction_before_;
   friction_before_ = fric || !skip_frictionless;
-  if (small_subsets) {
-    if (full) contact_forces<D, true, 1>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
-    else contact_forces<D, false, 1>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
-  } else if (full) {
-    contact_forces<D, true>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
-  } else {
-    contact_forces<D, false>(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
-  }
+  const auto pass = small_subsets ? (full ? &contact_forces<D, true, 1> : &contact_forces<D, false, 1>)
+                                  : (full ? &contact_forces<D, true> : &contact_forces<D, false>);
+  pass(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
   contact_account(pass_, status_, 0.5 * skin);
   --until_recheck_;
 }
