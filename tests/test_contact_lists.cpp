@@ -16,51 +16,9 @@
 namespace {
 
 using namespace fdem;
-
-template <int D>
-HostMesh cracked_block(int n) {
-  HostMesh m = D == 2 ? generate_crossed_rectangle(0, 0, 0.04, 0.04, n, n, "body")
-                      : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
-  insert_interfaces(m, {true});
-  return m;
-}
-
-// A cracked block on a fixed base under gravity, pressed by a friction platen from above; skin:
-// the Verlet skin (large: no rebuild by the displacement bound over the test).
-template <int D>
-Case pressed_case(double skin) {
-  auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
-  c.interface_materials = {fdem_test::strong_interface(2e7 / 0.01, 0.8e7 / 0.01)};
-  c.fracture_material = 0;
-  c.contact.enabled = 1;
-  c.contact.friction = 0.5;
-  c.contact.skin = skin;
-  VelocityBC fix;
-  fix.set = D == 2 ? "ymin" : "zmin";
-  fix.active = {true, true, true};
-  c.velocity_bcs = {fix};
-  c.gravity = {0, 0, 0};
-  c.gravity[D - 1] = -9.81;
-  PlatenSpec p;
-  p.name = "top";
-  p.point[D - 1] = 0.0401;
-  p.normal[D - 1] = -1.0;
-  p.velocity[D - 1] = -0.05;
-  p.friction = 0.3;
-  c.platens = {p};
-  return c;
-}
-
-// Interfaces q with pick(q) failed (damage 1, as fdem_test::fail_all_interfaces), not handed over.
-template <int D, class Pick>
-void fail_interfaces(Simulation<D>& sim, Pick pick) {
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  Kokkos::deep_copy(h, sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    if (pick(q))
-      for (int k = 0; k < D; ++k) store_point(h, q, k, CohesivePoint{1.0, 0.5, 1.0, 0.0});
-  Kokkos::deep_copy(sim.m.ihist, h);
-}
+using fdem_test::cracked_block;
+using fdem_test::fail_interfaces;
+using fdem_test::pressed_case;
 
 // A host copy of the candidate lists: per node, face -> history (fn, ac, g0, fs).
 using PairMap = std::map<std::pair<int, int>, std::vector<double>>;

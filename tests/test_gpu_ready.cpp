@@ -27,6 +27,9 @@
 namespace {
 
 using namespace fdem;
+using fdem_test::cracked_block;
+using fdem_test::fail_interfaces;
+using fdem_test::pressed_case;
 
 struct Recorded {
   std::vector<std::string> fences, copies, host_reductions;
@@ -111,39 +114,6 @@ std::string list(const std::vector<std::string>& v) {
   return out;
 }
 
-template <int D>
-HostMesh cracked_block(int n) {
-  HostMesh m = D == 2 ? generate_crossed_rectangle(0, 0, 0.04, 0.04, n, n, "body")
-                      : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
-  insert_interfaces(m, {true});
-  return m;
-}
-
-// A block cracked into single elements on a fixed base under gravity, pressed by a platen from
-// above, shaken: fragments in contact with friction, candidate lists rebuilt as they move.
-template <int D>
-Case pressed_case() {
-  auto c = fdem_test::basic_case(D, 1e7, 0.25, 2000);
-  c.interface_materials = {fdem_test::strong_interface(2e7 / 0.01, 0.8e7 / 0.01)};
-  c.fracture_material = 0;
-  c.contact.enabled = 1;
-  c.contact.friction = 0.5;
-  VelocityBC fix;
-  fix.set = D == 2 ? "ymin" : "zmin";
-  fix.active = {true, true, true};
-  c.velocity_bcs = {fix};
-  c.gravity = {0, 0, 0};
-  c.gravity[D - 1] = -9.81;
-  PlatenSpec p;
-  p.name = "top";
-  p.point[D - 1] = 0.0401;
-  p.normal[D - 1] = -1.0;
-  p.velocity[D - 1] = -0.05;
-  p.friction = 0.3;
-  c.platens = {p};
-  return c;
-}
-
 // What `n` unsampled steps of `sim` ask for: on the steps that neither re-check the contact
 // system's device status nor rebuild its candidate lists ("quiet" steps), on those that re-check
 // without a rebuild, and on those that rebuild or hand interfaces over (the grid, the counts of
@@ -181,18 +151,6 @@ StepsRecord record_steps(Simulation<D>& sim, int n) {
     into.sync_copies += r.sync_copies;
   }
   return out;
-}
-
-// Interfaces q with pick(q) failed (damage 1, as fdem_test::fail_all_interfaces), not handed over:
-// the force kernel flags them and the contact system hands them over at its next check.
-template <int D, class Pick>
-void fail_interfaces(Simulation<D>& sim, Pick pick) {
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  Kokkos::deep_copy(h, sim.m.ihist);
-  for (int q = 0; q < sim.m.ni; ++q)
-    if (pick(q))
-      for (int k = 0; k < D; ++k) store_point(h, q, k, CohesivePoint{1.0, 0.5, 1.0, 0.0});
-  Kokkos::deep_copy(sim.m.ihist, h);
 }
 
 // staged: half of the interfaces fail before the recording, the rest after its first 100 steps

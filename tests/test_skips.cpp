@@ -14,16 +14,9 @@
 namespace {
 
 using namespace fdem;
+using fdem_test::cracked_block;
 using fdem_test::fail_all_interfaces;
 using fdem_test::shake;
-
-template <int D>
-HostMesh cracked_block(int n) {
-  HostMesh m = D == 2 ? generate_crossed_rectangle(0, 0, 0.04, 0.04, n, n, "body")
-                      : generate_box({0, 0, 0}, {0.04, 0.04, 0.04}, n, n, n, "body");
-  insert_interfaces(m, {true});
-  return m;
-}
 
 template <int D>
 void expect_same_state(const Simulation<D>& a, const Simulation<D>& b, const std::string& what) {
