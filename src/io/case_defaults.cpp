@@ -74,7 +74,7 @@ void resolve_defaults(Case& c, const HostMesh& mesh) {
   if (ct.friction < 0) show(doc, "friction", ct.friction = default_contact_friction(c));
   // skin: 2 % of the mean element size (docs/performance-impact.md, "Skin"): the narrow phase costs
   // in proportion to the candidates, which grow with the search distance dpen + skin, and a
-  // rebuild costs a few narrow-phase passes; the results do not depend on it
+  // rebuild costs about ten narrow-phase passes; the results do not depend on it
   if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.02 * mesh_quality(mesh).mean_size);
 }
 
