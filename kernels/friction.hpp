@@ -15,7 +15,12 @@ struct ShearStep {
   double slip;   // energy dissipated by the slip (set only when slipped)
 };
 
-// law: anything with ks (Pa/m, times the area), mu and coh (Pa), e.g. ContactLaw or PlatenDev.
+// The parameters coulomb_shear reads.
+struct FrictionLaw {
+  double ks, mu, coh;  // Pa/m (times the area), -, Pa
+};
+
+// law: anything with ks (Pa/m, times the area), mu and coh (Pa), e.g. FrictionLaw or PlatenDev.
 // n: unit normal of the contact (D components); A: contact area; Fn: normal force (>= 0);
 // fs: the last step's shear force (global components, scaled to this step's area by the caller)
 // and fsn = fs . n; du: relative displacement over the step (node against the other side) and

@@ -102,6 +102,11 @@ struct InterfaceData {
   // sets icontact_pending when it meets a failed, parted interface not handed over yet.
   Kokkos::View<int*> icontact;
   Kokkos::View<int> icontact_pending;
+  // Per interface (extent ni) when some interface material is a frictional joint
+  // (InterfaceMaterial::frictional): its friction coefficient tan(phi), -1 for the others; empty
+  // otherwise. Those interfaces start failed and handed over (icontact = 1); the contact faces
+  // they leave take this friction (ContactSurface::fmu).
+  Kokkos::View<double*> ifric;
   bool contact_handover = false;
   double handover_slip = 0;  // see interface_parted (kernels/interface.hpp)
 };

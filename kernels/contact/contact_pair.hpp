@@ -16,6 +16,7 @@ struct ContactLaw {
   double dpen;       // deepest penetration recognised (m); deeper nodes are not in contact
   double tol;        // a contact fades out as its projection leaves the face by this much (barycentric)
   double cos_same;   // coplanar test: faces of one piece with normals closer than this share a contact
+  double srf = 1.0;  // strength reduction factor now (divides a frictional joint's friction too)
 };
 
 // Results of one narrow-phase pass (a reduction type): energy dissipated by the slip of the shear
@@ -127,7 +128,10 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
       f2old += was ? pfs(j, k) * pfs(j, k) : 0.0;
       fsn += fs[k] * n[k];
     }
-    const ShearStep<D> sh = coulomb_shear<D>(L, n, A, Fn, fs, fsn, du, dun);
+    // the face of a frictional joint has the joint's friction (ContactSurface::fmu)
+    const bool joint = S.fmu.extent(0) > 0 && S.fmu(fc) >= 0.0;
+    const FrictionLaw fl{L.ks, joint ? S.fmu(fc) / L.srf : L.mu, L.coh};
+    const ShearStep<D> sh = coulomb_shear<D>(fl, n, A, Fn, fs, fsn, du, dun);
     if (was) sums.dissipated += 0.5 * (f2old / pac(j) - sh.f2 / A) / L.ks;
     if (sh.slipped) sums.dissipated += sh.slip;
     for (int k = 0; k < D; ++k) Fs[k] = sh.Fs[k];

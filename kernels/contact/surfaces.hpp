@@ -38,6 +38,10 @@ struct ContactSurface {
   Kokkos::View<int*> nfoff, nface;
   Kokkos::View<double*> narea;
   Kokkos::View<int*> fiface;
+  // friction coefficient of each face (nf) when some interface is a frictional joint
+  // (Model::ifric): the joint's for the faces of its interfaces, -1 (the contact law's) for the
+  // others; empty otherwise
+  Kokkos::View<double*> fmu;
   int nb = 0;
   Kokkos::View<int*> vgrp, clus;
   // geometry of the active faces at the current positions (face_geometry): row fslot(f) for an
@@ -97,6 +101,26 @@ void element_planes(const Kokkos::View<double* [D]>& x, const ContactSurface<D>&
           eplane(e, a, D) = off;
         }
       });
+}
+
+// Per-face friction (surf.fmu, allocated) from the per-interface friction of frictional joints
+// (ifric, Model::ifric): the interface's for its two faces, -1 for the outer boundary. Returns the
+// largest.
+template <int D>
+double joint_face_friction(const ContactSurface<D>& surf, const Kokkos::View<double*>& ifric_in, int nf) {
+  auto fmu = surf.fmu;
+  auto fiface = surf.fiface;
+  auto ifric = ifric_in;
+  double mu_max = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::joint_friction", Kokkos::RangePolicy<ExecSpace>(0, nf),
+      KOKKOS_LAMBDA(const int f, double& mx) {
+        const int q = fiface(f);
+        fmu(f) = q < 0 ? -1.0 : ifric(q);
+        mx = fmu(f) > mx ? fmu(f) : mx;
+      },
+      Kokkos::Max<double>(mu_max));
+  return mu_max;
 }
 
 // Active faces: the outer boundary, and both faces of every handed-over interface.

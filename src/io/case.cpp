@@ -112,12 +112,21 @@ void check_mesh_regions(const Case& c, const HostMesh& mesh) {
   }
 }
 
-// Node sets used by the boundary conditions, point loads and monitors.
+// Node sets used by the boundary conditions, point loads and monitors; face sets of fracture.surfaces.
 void check_mesh_sets(const Case& c, const HostMesh& mesh) {
   auto fail = [&](const std::string& path, const std::string& msg) { fail_at(c, path, msg); };
   std::vector<std::string> sets;
   for (const auto& kv : mesh.node_sets) sets.push_back(kv.first);
+  const std::string prefix = kRegionSetPrefix;
   auto check_set = [&](const std::string& set, const std::string& path) {
+    if (set.compare(0, prefix.size(), prefix) == 0) {  // "region.<name>": the nodes of a region
+      const std::string r = set.substr(prefix.size());
+      if (mesh.region_index(r) < 0)
+        fail(path, "the mesh has no region '" + r + "'" + did_you_mean(r, mesh.region_names) + " (\"" +
+                       prefix + "<region>\" names the nodes of a region; mesh regions: " +
+                       quoted_list(mesh.region_names) + ")");
+      return;
+    }
     if (!mesh.node_sets.count(set))
       fail(path, "the mesh has no node set '" + set + "'" + did_you_mean(set, sets) +
                      " (node sets: " + quoted_list(sets) + ")");
@@ -139,6 +148,14 @@ void check_mesh_sets(const Case& c, const HostMesh& mesh) {
   for (size_t i = 0; i < c.point_loads.size(); ++i)
     check_set(c.point_loads[i].set, child(child("boundary.point_loads", i), "set"));
   for (size_t i = 0; i < c.monitors.size(); ++i) check_set(c.monitors[i], child("output.monitors", i));
+  std::vector<std::string> faces;
+  for (const auto& kv : mesh.face_sets) faces.push_back(kv.first);
+  for (const auto& kv : c.surface_iface_material)
+    if (!mesh.face_sets.count(kv.first))
+      fail(child("fracture.surfaces", kv.first),
+           "the mesh has no named " + std::string(c.dim == 2 ? "curve" : "surface") + " '" + kv.first + "'" +
+               did_you_mean(kv.first, faces) + " (physical groups of dimension " + std::to_string(c.dim - 1) +
+               " of a Gmsh mesh: " + (faces.empty() ? std::string("none") : quoted_list(faces)) + ")");
 }
 
 }  // namespace

@@ -29,6 +29,9 @@ struct InterfaceMaterial {
   double phi = 0;           // rad (file: phi_deg)
   double Gnc = 0, Gsc = 0;  // N/m
   double eta = 2.0;         // Benzeggagh-Kenane exponent
+  // No tension and no cohesion: a purely frictional joint. Its interfaces are failed and handed
+  // over to contact from the start; contacts on their faces take the friction tan(phi).
+  bool frictional() const { return ft == 0 && c == 0; }
 };
 
 // Random strength of the interfaces (docs/case-format.md, "fracture.scatter"): interface q's
@@ -103,6 +106,10 @@ struct Case {
   // rest take fracture_material. Indices into interface_materials.
   std::map<std::string, int> region_iface_material;
   std::map<std::pair<std::string, std::string>, int> pair_iface_material;
+  // Interfaces on named surfaces (face sets of the mesh: physical curves in 2D, surfaces in 3D):
+  // inserted there even between elements of regions that are not fracturable, and of that
+  // material (wins over the region and pair rules). Face set name -> index into interface_materials.
+  std::map<std::string, int> surface_iface_material;
   StrengthScatter scatter;
   // Strength reduction of the interfaces (slope stability): f_t, c and tan(phi) are divided by
   // SRF(t) = srf_initial for t < srf_start, srf_initial + srf_rate (t - srf_start) after.

@@ -158,6 +158,13 @@ void read_materials_by_place(json& f, Case& c, const Reader& R, const std::vecto
     if (c.pair_iface_material.count(key)) R.fail(p, "the pair ('" + a + "', '" + b + "') is listed twice");
     c.pair_iface_material[key] = interface_material_ref(pm[i]["material"], p + ".material", R, names);
   }
+  if (!f.contains("surfaces")) return;  // (not added to the case as read: its hash stays that of earlier versions)
+  json& sm = R.object(f, "fracture", "surfaces", false);
+  for (auto it = sm.begin(); it != sm.end(); ++it) {
+    const std::string p = child("fracture.surfaces", it.key());
+    if (it.key().empty()) R.fail(p, "a surface name must not be empty");
+    c.surface_iface_material[it.key()] = interface_material_ref(*it, p, R, names);
+  }
 }
 
 // "fracture.scatter": random strength per interface.
@@ -189,7 +196,8 @@ void read_scatter(json& f, Case& c, const Reader& R) {
 void read_fracture(json& doc, Case& c, const Reader& R) {
   json& f = R.object(doc, "", "fracture", false);
   R.keys(f, "fracture",
-         {"regions", "interface_material", "strength_reduction", "region_materials", "pair_materials", "scatter"});
+         {"regions", "interface_material", "strength_reduction", "region_materials", "pair_materials",
+          "surfaces", "scatter"});
   if (f.contains("strength_reduction")) {
     json& sr = R.object(f, "fracture", "strength_reduction", false);
     const std::string sp = "fracture.strength_reduction";
@@ -198,9 +206,12 @@ void read_fracture(json& doc, Case& c, const Reader& R) {
     c.srf_start = R.number(sr, sp, "start_time", ge(0), 0.0);
     c.srf_rate = R.number(sr, sp, "rate", ge(0), 0.0);
   }
-  json& regs = R.array(f, "fracture", "regions", true);
-  if (regs.empty())
-    R.fail("fracture.regions", "at least one region is needed (omit 'fracture' for no fracture)");
+  // with named surfaces, the regions may be none (interfaces on those surfaces only)
+  const bool surfaces = f.contains("surfaces") && f["surfaces"].is_object() && !f["surfaces"].empty();
+  json& regs = R.array(f, "fracture", "regions", !surfaces);
+  if (regs.empty() && !surfaces)
+    R.fail("fracture.regions",
+           "at least one region (or one of fracture.surfaces) is needed (omit 'fracture' for no fracture)");
   std::vector<std::string> known;
   for (const auto& kv : c.region_material) known.push_back(kv.first);
   for (size_t i = 0; i < regs.size(); ++i) {
@@ -302,8 +313,10 @@ void read_interfaces(json& doc, Case& c, const Reader& R) {
     m.ft = R.number(*it, p, "ft", ge(0));
     m.c = R.number(*it, p, "c", ge(0));
     m.phi = R.number(*it, p, "phi_deg", between(0, false, 90, true)) * kPi / 180.0;
-    m.Gnc = R.number(*it, p, "Gnc", gt(0));
-    m.Gsc = R.number(*it, p, "Gsc", gt(0));
+    // a frictional joint (ft = c = 0) never softens: its fracture energies are not needed
+    const std::optional<double> unused = m.frictional() ? std::optional<double>(1.0) : std::nullopt;
+    m.Gnc = R.number(*it, p, "Gnc", gt(0), unused);
+    m.Gsc = R.number(*it, p, "Gsc", gt(0), unused);
     m.eta = R.number(*it, p, "eta", gt(0), 2.0);
     c.interface_materials.push_back(m);
   }

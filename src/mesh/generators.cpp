@@ -212,6 +212,13 @@ HostMesh merge_meshes(const HostMesh& a, const HostMesh& b, const std::string& p
     for (int n : nodes) s.push_back(n + na);
     m.node_sets[prefix_b + "." + name] = s;
   }
+  m.face_sets.clear();
+  for (const auto& [name, faces] : a.face_sets) m.face_sets[prefix_a + "." + name] = faces;
+  for (const auto& [name, faces] : b.face_sets) {
+    std::vector<int> s;
+    for (int n : faces) s.push_back(n + na);
+    m.face_sets[prefix_b + "." + name] = s;
+  }
   for (int n : b.ifaces) m.ifaces.push_back(n + na);
   for (int e : b.iface_elems) m.iface_elems.push_back(e + ea);
   if (m.node_origin.size() != static_cast<size_t>(na)) {

@@ -86,6 +86,11 @@ void pack(std::string& b, const Extracted& ex) {
     put_str(b, name);
     put_vec(b, nodes);
   }
+  put<std::uint64_t>(b, m.face_sets.size());
+  for (const auto& [name, faces] : m.face_sets) {
+    put_str(b, name);
+    put_vec(b, faces);
+  }
   put_vec(b, m.ifaces);
   put_vec(b, m.iface_elems);
   put_vec(b, m.node_origin);
@@ -106,6 +111,10 @@ Extracted unpack(const std::string& b) {
   for (std::size_t i = 0, n = u.count(16); i < n; ++i) {
     std::string name = u.str();
     m.node_sets[name] = u.vec<int>();
+  }
+  for (std::size_t i = 0, n = u.count(16); i < n; ++i) {
+    std::string name = u.str();
+    m.face_sets[name] = u.vec<int>();
   }
   m.ifaces = u.vec<int>();
   m.iface_elems = u.vec<int>();

@@ -237,6 +237,34 @@ void read_node_sets(HostMesh& m, const NodeIndex& nodes) {
   std::iota(m.node_origin.begin(), m.node_origin.end(), 0);
 }
 
+// Face sets: physical groups of dimension dim - 1 as their facets (2-node lines in 2D, 3-node
+// triangles in 3D); facets with a node that no element uses are left out.
+void read_face_sets(HostMesh& m, const NodeIndex& nodes) {
+  const int d = m.dim - 1, type = m.dim == 2 ? 1 : 2;
+  gmsh::vectorpair pg;
+  gmsh::model::getPhysicalGroups(pg, d);
+  std::sort(pg.begin(), pg.end());
+  for (const auto& [gd, gtag] : pg) {
+    std::vector<int> ents;
+    gmsh::model::getEntitiesForPhysicalGroup(gd, gtag, ents);
+    auto& set = m.face_sets[group_name(gd, gtag)];
+    for (int ent : ents) {
+      std::vector<std::size_t> etags, ntags;
+      gmsh::model::mesh::getElementsByType(type, etags, ntags, ent);
+      for (std::size_t i = 0; i + m.dim <= ntags.size(); i += m.dim) {
+        int f[3] = {-1, -1, -1};
+        bool ok = true;
+        for (int a = 0; a < m.dim && ok; ++a) {
+          const auto it = nodes.index.find(ntags[i + a]);
+          ok = it != nodes.index.end();
+          if (ok) f[a] = it->second;
+        }
+        if (ok) set.insert(set.end(), f, f + m.dim);
+      }
+    }
+  }
+}
+
 }  // namespace
 
 Extracted extract_model(int dim, const std::string& source) {
@@ -251,6 +279,7 @@ Extracted extract_model(int dim, const std::string& source) {
   if (dim == 2) check_planar(xyz, nodes.size(), source);
   fill_mesh(out, xyz, elems, nodes);
   read_node_sets(m, nodes);
+  read_face_sets(m, nodes);
   return out;
 }
 

@@ -9,11 +9,16 @@
 //   Side A is the element with the LOWER index, side B the higher one. The A-side nodes follow the
 //   outward ordering of the face in element A, so the normal by the convention of mesh.hpp points
 //   from A towards B. Pair k = (A's copy, B's copy) of the same original node.
+// - Faces of the face sets named in `cut` get an interface even between two non-fracturable
+//   elements; the nodes on them take one copy per side (cut_sides).
 // - Interfaces are ordered by (element A, local face of A).
 // - node_origin of every new node is the node_origin of its original node (identity if the mesh
 //   had none), i.e. the node's id in the mesh as read or generated.
 #include <algorithm>
 #include <array>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "common/error.hpp"
 #include "mesh/mesh.hpp"
@@ -82,13 +87,116 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
   return neighbour;
 }
 
+// Faces of the cut face sets: cut[e * (dim + 1) + f] is 1 for local face f of element e when
+// it is a facet of one of the face sets named in `names` and shared by two elements.
+std::vector<char> cut_faces(const HostMesh& mesh, const std::vector<std::string>& names,
+                            const std::vector<int>& neighbour) {
+  const int dim = mesh.dim, npe = dim + 1, ne = mesh.num_elems(), nn = mesh.num_nodes();
+  std::vector<char> cut;
+  if (names.empty()) return cut;
+  cut.assign(static_cast<std::size_t>(ne) * npe, 0);
+  std::vector<std::pair<std::array<int, 3>, int>> keys;  // facet, index of its set in names
+  for (std::size_t ni = 0; ni < names.size(); ++ni) {
+    const std::string& name = names[ni];
+    const auto it = mesh.face_sets.find(name);
+    if (it == mesh.face_sets.end()) {
+      std::string known;
+      for (const auto& kv : mesh.face_sets) known += (known.empty() ? "'" : ", '") + kv.first + "'";
+      throw InputError("insert_interfaces: the mesh has no face set '" + name + "' (a physical " +
+                       (dim == 2 ? "curve" : "surface") +
+                       " of the Gmsh mesh; it has: " + (known.empty() ? "none" : known) + ")");
+    }
+    const std::vector<int>& f = it->second;
+    for (std::size_t i = 0; i + dim <= f.size(); i += dim) {
+      std::array<int, 3> k{-1, -1, -1};
+      for (int a = 0; a < dim; ++a) {
+        if (f[i + a] < 0 || f[i + a] >= nn)
+          throw InputError("insert_interfaces: face set '" + name + "': node id out of range");
+        k[a] = f[i + a];
+      }
+      sort_face_key(k, dim);
+      keys.push_back({k, static_cast<int>(ni)});
+    }
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<char> used(names.size(), 0);
+  for (int e = 0; e < ne; ++e)
+    for (int f = 0; f < npe; ++f) {
+      if (neighbour[static_cast<std::size_t>(e) * npe + f] < 0) continue;
+      std::array<int, 3> k{-1, -1, -1};
+      for (int a = 0; a < dim; ++a)
+        k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+      sort_face_key(k, dim);
+      for (auto it = std::lower_bound(keys.begin(), keys.end(), std::make_pair(k, -1));
+           it != keys.end() && it->first == k; ++it) {
+        cut[static_cast<std::size_t>(e) * npe + f] = 1;
+        used[it->second] = 1;
+      }
+    }
+  for (std::size_t ni = 0; ni < names.size(); ++ni)
+    if (!used[ni])
+      throw InputError("insert_interfaces: face set '" + names[ni] +
+                       "' has no face inside the mesh (every facet of it is on the " +
+                       "outer boundary or is not a face of an element): there is nothing to cut");
+  return cut;
+}
+
+// Union-find over element node slots (e * (dim + 1) + a).
+struct Slots {
+  std::vector<int> up;
+  int find(int i) {
+    while (up[i] != i) i = up[i] = up[up[i]];
+    return i;
+  }
+  void join(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) up[a > b ? a : b] = a < b ? a : b;
+  }
+};
+
+// For the nodes on a cut face of a non-fracturable element: the slots of the non-fracturable
+// elements around each such node joined where two of them share a face that is not cut (the
+// elements on one side of the cut; around the end of a cut surface, all of them).
+Slots cut_sides(const HostMesh& mesh, const std::vector<bool>& fracturable, const std::vector<int>& neighbour,
+                const std::vector<char>& cut, std::vector<char>& on_cut) {
+  const int dim = mesh.dim, npe = dim + 1, ne = mesh.num_elems();
+  Slots u;
+  on_cut.assign(mesh.num_nodes(), 0);
+  auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
+  for (int e = 0; e < ne; ++e)
+    for (int f = 0; f < npe; ++f)
+      if (cut[static_cast<std::size_t>(e) * npe + f] && !frac(e))
+        for (int k = 0; k < dim; ++k)
+          on_cut[mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, k)]] = 1;
+  u.up.resize(static_cast<std::size_t>(ne) * npe);
+  for (std::size_t i = 0; i < u.up.size(); ++i) u.up[i] = static_cast<int>(i);
+  for (int e = 0; e < ne; ++e) {
+    if (frac(e)) continue;
+    for (int f = 0; f < npe; ++f) {
+      const int b = neighbour[static_cast<std::size_t>(e) * npe + f];
+      if (b <= e || frac(b) || cut[static_cast<std::size_t>(e) * npe + f]) continue;
+      for (int k = 0; k < dim; ++k) {
+        const int la = face_node(dim, f, k);
+        const int o = mesh.elems[static_cast<std::size_t>(e) * npe + la];
+        if (!on_cut[o]) continue;
+        for (int lb = 0; lb < npe; ++lb)
+          if (mesh.elems[static_cast<std::size_t>(b) * npe + lb] == o) u.join(e * npe + la, b * npe + lb);
+      }
+    }
+  }
+  return u;
+}
+
 // New nodes, element by element: new_elems is the new connectivity, origin[new] the original
-// (pre-insertion) id.
-void split_nodes(const HostMesh& mesh, const std::vector<bool>& fracturable, std::vector<int>& new_elems,
-                 std::vector<int>& origin) {
+// (pre-insertion) id. A node of a non-fracturable element on a cut face takes the copy of its
+// side (cut_sides), numbered when first met like the shared nodes.
+void split_nodes(const HostMesh& mesh, const std::vector<bool>& fracturable, const std::vector<char>& on_cut,
+                 Slots& sides, std::vector<int>& new_elems, std::vector<int>& origin) {
   const int npe = mesh.dim + 1;
   const int ne = mesh.num_elems();
   std::vector<int> shared(mesh.num_nodes(), -1);  // original -> new id for nodes of non-fracturable elements
+  std::vector<int> side_copy(on_cut.empty() ? 0 : static_cast<std::size_t>(ne) * npe, -1);
   new_elems.resize(mesh.elems.size());
   origin.reserve(static_cast<std::size_t>(ne) * npe);
   for (int e = 0; e < ne; ++e) {
@@ -100,11 +208,12 @@ void split_nodes(const HostMesh& mesh, const std::vector<bool>& fracturable, std
         new_elems[s] = static_cast<int>(origin.size());
         origin.push_back(o);
       } else {
-        if (shared[o] < 0) {
-          shared[o] = static_cast<int>(origin.size());
+        int& id = !on_cut.empty() && on_cut[o] ? side_copy[sides.find(static_cast<int>(s))] : shared[o];
+        if (id < 0) {
+          id = static_cast<int>(origin.size());
           origin.push_back(o);
         }
-        new_elems[s] = shared[o];
+        new_elems[s] = id;
       }
     }
   }
@@ -112,22 +221,26 @@ void split_nodes(const HostMesh& mesh, const std::vector<bool>& fracturable, std
 
 // Interfaces: for each element in order, faces towards higher-index neighbours.
 void build_interfaces(const HostMesh& mesh, const std::vector<bool>& fracturable,
-                      const std::vector<int>& neighbour, const std::vector<int>& new_elems,
-                      std::vector<int>& ifaces, std::vector<int>& iface_elems) {
+                      const std::vector<int>& neighbour, const std::vector<char>& cut,
+                      const std::vector<int>& new_elems, std::vector<int>& ifaces,
+                      std::vector<int>& iface_elems, std::vector<std::array<int, 3>>& iface_keys) {
   const int dim = mesh.dim;
   const int npe = dim + 1;
   const int ne = mesh.num_elems();
+  const bool keep_keys = !mesh.face_sets.empty();  // for fill_iface_sets
   auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
       const int b = neighbour[static_cast<std::size_t>(e) * npe + f];
       if (b <= e) continue;  // boundary face, or already handled from the lower-index side
-      if (!frac(e) && !frac(b)) continue;
+      if (!frac(e) && !frac(b) && (cut.empty() || !cut[static_cast<std::size_t>(e) * npe + f])) continue;
       int a_nodes[3], b_nodes[3];
+      std::array<int, 3> key{-1, -1, -1};
       for (int k = 0; k < dim; ++k) {
         const int la = face_node(dim, f, k);
         const int o = mesh.elems[static_cast<std::size_t>(e) * npe + la];
         a_nodes[k] = new_elems[static_cast<std::size_t>(e) * npe + la];
+        key[k] = o;
         b_nodes[k] = -1;
         for (int lb = 0; lb < npe; ++lb)
           if (mesh.elems[static_cast<std::size_t>(b) * npe + lb] == o)
@@ -137,7 +250,31 @@ void build_interfaces(const HostMesh& mesh, const std::vector<bool>& fracturable
       ifaces.insert(ifaces.end(), b_nodes, b_nodes + dim);
       iface_elems.push_back(e);
       iface_elems.push_back(b);
+      if (keep_keys) {
+        sort_face_key(key, dim);
+        iface_keys.push_back(key);
+      }
     }
+}
+
+// The interfaces on each face set (by the original node ids of their faces).
+void fill_iface_sets(HostMesh& mesh, const std::vector<std::array<int, 3>>& iface_keys) {
+  const int dim = mesh.dim;
+  mesh.iface_sets.clear();
+  for (const auto& [name, f] : mesh.face_sets) {
+    std::vector<std::array<int, 3>> keys;
+    for (std::size_t i = 0; i + dim <= f.size(); i += dim) {
+      std::array<int, 3> k{-1, -1, -1};
+      for (int a = 0; a < dim; ++a) k[a] = f[i + a];
+      sort_face_key(k, dim);
+      keys.push_back(k);
+    }
+    std::sort(keys.begin(), keys.end());
+    std::vector<int>& out = mesh.iface_sets[name];
+    for (std::size_t q = 0; q < iface_keys.size(); ++q)
+      if (std::binary_search(keys.begin(), keys.end(), iface_keys[q])) out.push_back(static_cast<int>(q));
+  }
+  mesh.face_sets.clear();
 }
 
 // Every node set holds all copies of its original nodes (sorted, unique).
@@ -164,16 +301,23 @@ void remap_node_sets(HostMesh& mesh, const std::vector<int>& origin) {
 
 }  // namespace
 
-void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable) {
+void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable,
+                       const std::vector<std::string>& cut) {
   check_insertion_args(mesh, fracturable);
   const int dim = mesh.dim;
   const int nn = mesh.num_nodes();
   const std::vector<int> neighbour = face_neighbours(mesh);
+  const std::vector<char> cutf = cut_faces(mesh, cut, neighbour);
+  std::vector<char> on_cut;
+  Slots sides;
+  if (!cut.empty()) sides = cut_sides(mesh, fracturable, neighbour, cutf, on_cut);
   std::vector<int> new_elems, origin;
-  split_nodes(mesh, fracturable, new_elems, origin);
+  split_nodes(mesh, fracturable, on_cut, sides, new_elems, origin);
   const int nn_new = static_cast<int>(origin.size());
   std::vector<int> ifaces, iface_elems;
-  build_interfaces(mesh, fracturable, neighbour, new_elems, ifaces, iface_elems);
+  std::vector<std::array<int, 3>> iface_keys;
+  build_interfaces(mesh, fracturable, neighbour, cutf, new_elems, ifaces, iface_elems, iface_keys);
+  fill_iface_sets(mesh, iface_keys);
 
   // Coordinates, node sets, origins.
   std::vector<double> X(static_cast<std::size_t>(nn_new) * dim);

@@ -148,6 +148,8 @@ void reorder_for_locality(HostMesh& mesh) {
     for (int& n : set) n = node_new[n];
     std::sort(set.begin(), set.end());
   }
+  for (auto& [name, faces] : mesh.face_sets)
+    for (int& n : faces) n = node_new[n];
   reorder_interfaces(mesh, node_new, elem_new);
   mesh.X.swap(X);
   mesh.elems.swap(elems);

@@ -275,6 +275,24 @@ struct Csr {
 // A face is on the boundary when no other element has all its nodes and it is no side of an
 // interface. Found through the elements of each node and the interface sides of each node (their
 // smallest node): linear in the mesh (sorting every face cost 10 % of a 3D run's set-up).
+void add_region_node_sets(HostMesh& mesh, const std::vector<std::string>& regions) {
+  const int npe = mesh.dim + 1, ne = mesh.num_elems();
+  for (const std::string& r : regions) {
+    const int ri = mesh.region_index(r);
+    if (ri < 0)
+      throw InputError("node set '" + std::string(kRegionSetPrefix) + r + "': the mesh has no region '" + r +
+                       "'");
+    std::vector<char> in(mesh.num_nodes(), 0);
+    for (int e = 0; e < ne; ++e)
+      if (mesh.elem_region[e] == ri)
+        for (int a = 0; a < npe; ++a) in[mesh.elems[static_cast<std::size_t>(e) * npe + a]] = 1;
+    std::vector<int>& set = mesh.node_sets[kRegionSetPrefix + r];
+    set.clear();
+    for (int n = 0; n < mesh.num_nodes(); ++n)
+      if (in[n]) set.push_back(n);
+  }
+}
+
 std::vector<int> boundary_faces(const HostMesh& mesh) {
   const int dim = mesh.dim;
   const int npe = dim + 1;

@@ -18,6 +18,12 @@ struct HostMesh {
   // Named node sets: physical groups of lower dimension (boundaries, points). After interface
   // insertion a set holds every copy of its original nodes.
   std::map<std::string, std::vector<int>> node_sets;
+  // Named face sets: physical groups of dimension dim - 1 (curves in 2D, surfaces in 3D) as their
+  // facets, `dim` node ids each (segments, triangles). Before insertion only: insert_interfaces
+  // turns them into iface_sets.
+  std::map<std::string, std::vector<int>> face_sets;
+  // After insertion: per face set, the interfaces that lie on it (sorted indices).
+  std::map<std::string, std::vector<int>> iface_sets;
   // Cohesive interfaces (filled by insert_interfaces). Interface i has `dim` node pairs; pair k is
   // (ifaces[2*dim*i + k] on side A, ifaces[2*dim*i + dim + k] on side B). The A-side nodes are
   // ordered so that the face normal from their ordering points from A towards B:
@@ -107,8 +113,18 @@ void reorder_for_locality(HostMesh& mesh);
 
 // Interface insertion: every element of a fracturable region gets its own copies of its nodes,
 // and every face shared by two elements of which at least one is fracturable gets an interface.
-// Faces between two non-fracturable elements stay continuous. `fracturable[r]` is true for region r.
-void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable);
+// Faces between two non-fracturable elements stay continuous, except those of the face sets
+// named in `cut` (joints, pre-existing cracks): they get an interface too, and their nodes a copy
+// for each side (a node where a cut surface ends inside the body, at a crack tip, keeps one copy
+// on both sides). `fracturable[r]` is true for region r. Fills iface_sets for every face set.
+void insert_interfaces(HostMesh& mesh, const std::vector<bool>& fracturable,
+                       const std::vector<std::string>& cut = {});
+
+// Node sets "region.<name>" for the listed regions: the nodes of that region's elements. After
+// interface insertion these are that region's copies only (one side of an interface between two
+// regions), unlike a Gmsh node set, which holds every copy of its nodes.
+void add_region_node_sets(HostMesh& mesh, const std::vector<std::string>& regions);
+inline const char* kRegionSetPrefix = "region.";
 
 // Faces on the outer boundary (belong to exactly one element and to no interface), `dim` node
 // ids each, ordered so that the normal by the convention above points out of the body.

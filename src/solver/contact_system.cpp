@@ -66,7 +66,18 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   // candidate lists by a local search (update_lists; docs/performance-impact.md section 2). On
   // GPUs the check also costs a copy of the pending flag to the host.
   check_every_ = 25;
+  start_with_joints(m);
   refresh_surfaces(m);
+}
+
+// Frictional joints (Model::ifric) are handed over from the start: their faces take the joint's
+// friction, and two pieces that they separate may meet.
+template <int D>
+void ContactSystem<D>::start_with_joints(const Model<D>& m) {
+  if (m.ifric.extent(0) == 0) return;
+  surf_.fmu = Kokkos::View<double*>("fdem::contact::fmu", nf_);
+  joint_friction_ = joint_face_friction<D>(surf_, m.ifric, nf_) > 0;
+  may_meet_ = true;
 }
 
 // Parameters (docs/case-format.md, "contact").
@@ -344,7 +355,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   // Frictionless contact skips the shear springs. On the first step without friction after steps
   // with it, the full kernel runs once more: it sets every stored shear force to zero (and counts
   // the spring energy of contacts that end), so that the skipped kernel's zero history is exact.
-  const bool fric = law.mu != 0.0 || law.coh != 0.0;
+  const bool fric = law.mu != 0.0 || law.coh != 0.0 || joint_friction_;
   const bool full = !skip_frictionless || fric || friction_before_;
   friction_before_ = fric || !skip_frictionless;
   const auto pass = small_subsets ? (full ? &contact_forces<D, true, 1> : &contact_forces<D, false, 1>)

@@ -143,6 +143,8 @@ class ContactSystem {
   void allocate_work();
   // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
   void refresh_surfaces(const Model<D>& m);
+  // Frictional joints (Model::ifric): per-face friction, and the pieces may meet from the start.
+  void start_with_joints(const Model<D>& m);
   // After a handover (surfaces refreshed; before_: the surfaces of the lists): the lists updated by
   // a local search at the build positions, when every surface node is within half the skin of its
   // build position (else need_build_ stays set).
@@ -172,6 +174,7 @@ class ContactSystem {
   CellGrid<D> tgrid_;                         // grid of the touched faces
   bool may_meet_ = false, need_build_ = true;
   bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
+  bool joint_friction_ = false;  // some face has a frictional joint's friction above 0 (surf_.fmu)
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int until_recheck_ = 0;  // steps to the next re-check of the candidate lists (0: this step)

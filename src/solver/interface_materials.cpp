@@ -62,7 +62,8 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
   map.count.assign(c.interface_materials.size(), 0);
   if (ni == 0) return map;
   if (c.fracture_material < 0) throw InputError(c.file + ": fracture: no interface material");
-  const bool by_place = !c.region_iface_material.empty() || !c.pair_iface_material.empty();
+  const bool by_place =
+      !c.region_iface_material.empty() || !c.pair_iface_material.empty() || !c.surface_iface_material.empty();
   const bool scatter = !c.scatter.distribution.empty();
   if (!by_place) {
     map.count[c.fracture_material] = ni;
@@ -91,8 +92,16 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
       const int ra = mesh.elem_region[mesh.iface_elems[2 * q]],
                 rb = mesh.elem_region[mesh.iface_elems[2 * q + 1]];
       map.material[q] = of_pair[static_cast<size_t>(ra) * nr + rb];
-      ++map.count[map.material[q]];
     }
+    // named surfaces win (a surface's interfaces, listed by insert_interfaces)
+    for (const auto& [name, m] : c.surface_iface_material) {
+      const auto it = mesh.iface_sets.find(name);
+      if (it == mesh.iface_sets.end())
+        throw InputError(c.file + ": fracture.surfaces." + name +
+                         ": the mesh's interfaces on it are not known");
+      for (int q : it->second) map.material[q] = m;
+    }
+    for (long q = 0; q < ni; ++q) ++map.count[map.material[q]];
   }
   if (scatter) {
     if (map.material.empty()) map.material.assign(ni, c.fracture_material);

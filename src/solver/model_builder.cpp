@@ -216,6 +216,40 @@ void upload_interface_materials(const Case& c, const InterfaceMaterialMap& map, 
   m.scale_energy = c.scatter.energy;
 }
 
+// Interfaces of frictional joint materials (no tension, no cohesion): failed (damage 1 at every
+// point, nothing dissipated) and handed over to contact from the start, with their friction in
+// m.ifric. Nothing when no interface takes such a material.
+template <int D>
+void start_frictional_joints(const Case& c, const InterfaceMaterialMap& map, Model<D>& m) {
+  auto material = [&](int q) -> const InterfaceMaterial& {
+    return c.interface_materials[map.material.empty() ? c.fracture_material : map.material[q]];
+  };
+  bool any = false;
+  for (int q = 0; q < m.ni && !any; ++q) any = material(q).frictional();
+  if (!any) return;
+  m.ifric = Kokkos::View<double*>("fdem::ifric", m.ni);
+  auto fr_h = mirror(m.ifric);
+  auto h_h = Kokkos::create_mirror_view(m.ihist);
+  auto ic_h = Kokkos::create_mirror_view(m.icontact);
+  Kokkos::deep_copy(h_h, m.ihist);
+  Kokkos::deep_copy(ic_h, m.icontact);
+  for (int q = 0; q < m.ni; ++q) {
+    const InterfaceMaterial& iq = material(q);
+    fr_h(q) = iq.frictional() ? std::tan(iq.phi) : -1.0;
+    if (!iq.frictional()) continue;
+    for (int k = 0; k < D; ++k) {  // damage 1 (cohesive_damage): dmax >= dmf > dm0 > 0
+      h_h(q, k, 0) = 2e-300;
+      h_h(q, k, 1) = 1e-300;
+      h_h(q, k, 2) = 2e-300;
+      h_h(q, k, 3) = 0.0;
+    }
+    ic_h(q) = 1;
+  }
+  Kokkos::deep_copy(m.ifric, fr_h);
+  Kokkos::deep_copy(m.ihist, h_h);
+  Kokkos::deep_copy(m.icontact, ic_h);
+}
+
 template <int D>
 double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m) {
   const int ni = m.ni;
@@ -255,6 +289,7 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
   for (int q = 0; q < ni; ++q) step = std::min(step, step_q[q]);
   Kokkos::deep_copy(m.iface, if_h);
   Kokkos::deep_copy(m.iarea, ia_h);
+  start_frictional_joints<D>(c, map, m);
   return step;
 }
 

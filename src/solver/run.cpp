@@ -1,5 +1,6 @@
 #include "solver/run.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -20,6 +21,19 @@ namespace fdem {
 
 namespace {
 
+// The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
+std::vector<std::string> region_sets_used(const Case& c) {
+  std::vector<std::string> sets = c.monitors, out;
+  for (const auto& b : c.velocity_bcs) sets.push_back(b.set);
+  for (const auto& p : c.point_loads) sets.push_back(p.set);
+  const std::string prefix = kRegionSetPrefix;
+  for (const auto& s : sets)
+    if (s.compare(0, prefix.size(), prefix) == 0) out.push_back(s.substr(prefix.size()));
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 // Mesh of a case, ready for the solver: built or read, checked, renumbered, interfaces inserted.
 // Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
 HostMesh prepare_mesh(const Case& c) {
@@ -37,12 +51,15 @@ HostMesh prepare_mesh(const Case& c) {
   Phase reorder("renumbering");
   reorder_for_locality(mesh);
   reorder.stop();
-  if (!c.fracturable_regions.empty()) {
+  if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
     Phase insert("interface_insertion");
     std::vector<bool> frac(mesh.region_names.size(), false);
     for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
-    insert_interfaces(mesh, frac);
+    std::vector<std::string> cut;
+    for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
+    insert_interfaces(mesh, frac, cut);
   }
+  add_region_node_sets(mesh, region_sets_used(c));
   // the exact count (a .msh file's is known only now), before the model is allocated
   check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
   return mesh;

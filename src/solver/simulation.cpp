@@ -24,7 +24,10 @@ void Simulation<D>::set_strength_reduction(double factor) {
   m.coh.tanphi = coh0_.tanphi / factor;
   m.coh.rescale = srf_hist_ / factor;
   m.srf = factor;  // interfaces with their own parameters (InterfaceData::params)
-  if (contact_) contact_->law.mu = mu0_ / factor;
+  if (contact_) {
+    contact_->law.mu = mu0_ / factor;
+    contact_->law.srf = factor;
+  }
 }
 
 // One step of the method (docs/theory.md section 2): internal forces, platens, contact, the
@@ -423,6 +426,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
     contact_->load_state(s, m);
     sync_platen_nodes();
     contact_->law.mu = mu0_ / srf_;
+    contact_->law.srf = srf_;
   }
 }
 

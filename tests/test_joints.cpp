@@ -1,0 +1,293 @@
+// Joints and pre-existing cracks on named surfaces (docs/case-format.md, "fracture.surfaces"):
+// interfaces only on a Gmsh mesh's named curve or surface of an otherwise continuous body, with
+// one node copy per side (one at a crack tip); "region.<name>" node sets; the direct shear of a
+// joint, whose peak shear stress is c + sigma_n tan(phi).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "common/error.hpp"
+#include "io/case.hpp"
+#include "mesh/mesh.hpp"
+#include "test_files.hpp"
+
+namespace {
+
+using json = nlohmann::json;
+
+std::string data(const std::string& f) { return std::string(FDEM_TEST_DATA) + "/" + f; }
+
+long facets(const fdem::HostMesh& m, const std::string& name) {
+  return static_cast<long>(m.face_sets.at(name).size()) / m.dim;
+}
+
+// Distinct nodes of a face set.
+long facet_nodes(const fdem::HostMesh& m, const std::string& name) {
+  std::vector<int> n = m.face_sets.at(name);
+  std::sort(n.begin(), n.end());
+  return std::unique(n.begin(), n.end()) - n.begin();
+}
+
+// Interfaces of side A and B that share the node of pair k (a crack tip).
+long shared_pairs(const fdem::HostMesh& m) {
+  long n = 0;
+  const int D = m.dim;
+  for (int q = 0; q < m.num_ifaces(); ++q)
+    for (int k = 0; k < D; ++k) n += m.ifaces[2 * D * q + k] == m.ifaces[2 * D * q + D + k];
+  return n;
+}
+
+TEST(Joints, InterfacesOnlyOnTheNamedCurvesWithACopyPerSide2D) {
+  const fdem::HostMesh read = fdem::read_gmsh(data("joint_square.geo"), 2);
+  ASSERT_EQ(read.face_sets.count("joint"), 1u);
+  ASSERT_EQ(read.face_sets.count("crack"), 1u);
+  const long nj = facets(read, "joint"), nc = facets(read, "crack");
+  EXPECT_EQ(nj, 10);  // 0.1 m at 0.01 m
+  EXPECT_EQ(nc, 5);
+  // continuous: no interface, the same nodes
+  fdem::HostMesh none = read;
+  fdem::insert_interfaces(none, {false, false});
+  EXPECT_EQ(none.num_ifaces(), 0);
+  EXPECT_EQ(none.num_nodes(), read.num_nodes());
+  // the joint across the block: every node on it gets a second copy
+  fdem::HostMesh joint = read;
+  fdem::insert_interfaces(joint, {false, false}, {"joint"});
+  EXPECT_EQ(joint.num_ifaces(), nj);
+  EXPECT_EQ(joint.num_nodes(), read.num_nodes() + facet_nodes(read, "joint"));
+  EXPECT_EQ(shared_pairs(joint), 0);
+  EXPECT_EQ(joint.iface_sets.at("joint").size(), static_cast<size_t>(nj));
+  EXPECT_TRUE(joint.iface_sets.at("crack").empty());
+  EXPECT_TRUE(joint.face_sets.empty());
+  // every interface joins the two regions: side A in one, side B in the other
+  for (int q = 0; q < joint.num_ifaces(); ++q)
+    EXPECT_NE(joint.elem_region[joint.iface_elems[2 * q]], joint.elem_region[joint.iface_elems[2 * q + 1]]);
+  // the crack ends inside the block: its tip keeps one copy, shared by both sides
+  fdem::HostMesh both = read;
+  fdem::insert_interfaces(both, {false, false}, {"crack", "joint"});
+  EXPECT_EQ(both.num_ifaces(), nj + nc);
+  EXPECT_EQ(both.num_nodes(), read.num_nodes() + facet_nodes(read, "joint") + facet_nodes(read, "crack") - 1);
+  EXPECT_EQ(shared_pairs(both), 1);
+  EXPECT_EQ(both.iface_sets.at("crack").size(), static_cast<size_t>(nc));
+  // a fracturable region cracks everywhere as before; the joint adds nothing there
+  fdem::HostMesh frac = read, frac_joint = read;
+  fdem::insert_interfaces(frac, {true, true});
+  fdem::insert_interfaces(frac_joint, {true, true}, {"joint"});
+  EXPECT_EQ(frac_joint.ifaces, frac.ifaces);
+  EXPECT_EQ(frac_joint.num_nodes(), frac.num_nodes());
+  EXPECT_EQ(frac_joint.iface_sets.at("joint").size(), static_cast<size_t>(nj));
+  // region node sets: one side's copies only
+  fdem::add_region_node_sets(joint, {"lower", "upper"});
+  const auto& lo = joint.node_sets.at("region.lower");
+  const auto& up = joint.node_sets.at("region.upper");
+  std::vector<int> common;
+  std::set_intersection(lo.begin(), lo.end(), up.begin(), up.end(), std::back_inserter(common));
+  EXPECT_TRUE(common.empty());
+  EXPECT_EQ(static_cast<long>(lo.size() + up.size()), joint.num_nodes());
+  // names that are not there
+  fdem::HostMesh bad = read;
+  try {
+    fdem::insert_interfaces(bad, {false, false}, {"jiont"});
+    ADD_FAILURE() << "no error for an unknown face set";
+  } catch (const fdem::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'jiont'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'joint'"), std::string::npos) << e.what();
+  }
+  bad = read;
+  EXPECT_THROW(fdem::insert_interfaces(bad, {false, false}, {"bottom"}),
+               fdem::InputError);  // on the boundary
+  EXPECT_THROW(fdem::add_region_node_sets(bad, {"middle"}), fdem::InputError);
+}
+
+TEST(Joints, InterfacesOnlyOnTheNamedSurface3D) {
+  const fdem::HostMesh read = fdem::read_gmsh(data("joint_box.geo"), 3);
+  const long nj = facets(read, "joint");
+  EXPECT_GT(nj, 16);
+  fdem::HostMesh joint = read;
+  fdem::insert_interfaces(joint, {false, false}, {"joint"});
+  EXPECT_EQ(joint.num_ifaces(), nj);
+  EXPECT_EQ(joint.num_nodes(), read.num_nodes() + facet_nodes(read, "joint"));
+  EXPECT_EQ(shared_pairs(joint), 0);
+  // each interface lies in the plane z = 0.05, its normal along z
+  for (int q = 0; q < joint.num_ifaces(); ++q)
+    for (int k = 0; k < 6; ++k) EXPECT_NEAR(joint.X[3 * joint.ifaces[6 * q + k] + 2], 0.05, 1e-12);
+}
+
+// The case's keys: the messages name the key, the bad name and the names the mesh has.
+std::string case_error(const std::string& text, const fdem::HostMesh* mesh = nullptr) {
+  try {
+    const fdem::Case c = fdem::parse_case(json::parse(text), "joints.json");
+    if (mesh) fdem::check_case_against_mesh(c, *mesh);
+  } catch (const fdem::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Joints, CaseKeysAreCheckedAgainstTheMesh) {
+  const std::string head =
+      R"({"name": "j", "dimension": 2, "time": {"end_time": 1e-3}, "mesh": {"generator": "rectangle", "size": [1, 1], "cells": [2, 2]},
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}}, "regions": {"lower": "rock", "upper": "rock"},
+    "interface_materials": {"j": {"kn": 1e12, "ks": 1e12, "ft": 0, "c": 0, "phi_deg": 30},
+                            "k": {"kn": 1e12, "ks": 1e12, "ft": 1e6, "c": 1e6, "phi_deg": 30, "Gnc": 10, "Gsc": 10}},)";
+  const fdem::HostMesh mesh = fdem::read_gmsh(data("joint_square.geo"), 2);
+  // a frictional joint needs no fracture energies; the surfaces alone need no fracturable region
+  EXPECT_EQ(
+      case_error(
+          head + R"("fracture": {"regions": [], "interface_material": "j", "surfaces": {"joint": "j"}}})",
+          &mesh),
+      "");
+  std::string e = case_error(
+      head + R"("fracture": {"regions": [], "interface_material": "j", "surfaces": {"jiont": "j"}}})", &mesh);
+  EXPECT_NE(e.find("fracture.surfaces.jiont"), std::string::npos) << e;
+  EXPECT_NE(e.find("'joint'"), std::string::npos) << e;  // what the mesh has
+  e = case_error(head + R"("fracture": {"regions": [], "interface_material": "j"}})");
+  EXPECT_NE(e.find("fracture.regions"), std::string::npos) << e;
+  e = case_error(head +
+                 R"("fracture": {"regions": [], "interface_material": "j", "surfaces": {"joint": "nope"}}})");
+  EXPECT_NE(e.find("fracture.surfaces.joint"), std::string::npos) << e;
+  // a cohesive material still needs them
+  e = case_error(
+      R"({"name": "j", "dimension": 2, "time": {"end_time": 1e-3}, "mesh": {"generator": "rectangle", "size": [1, 1], "cells": [2, 2]},
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}}, "regions": {"body": "rock"},
+    "interface_materials": {"k": {"kn": 1e12, "ks": 1e12, "ft": 1e6, "c": 0, "phi_deg": 30}}})");
+  EXPECT_NE(e.find("Gnc"), std::string::npos) << e;
+  // region node sets name a region of the mesh
+  e = case_error(head + R"("boundary": {"fixed": [{"set": "region.middle"}]}})", &mesh);
+  EXPECT_NE(e.find("boundary.fixed.0.set"), std::string::npos) << e;
+  EXPECT_NE(e.find("'middle'"), std::string::npos) << e;
+  EXPECT_NE(e.find("'lower'"), std::string::npos) << e;
+  EXPECT_EQ(case_error(head + R"("boundary": {"fixed": [{"set": "region.lower"}]}})", &mesh), "");
+}
+
+// Direct shear of the joint between the two blocks of joint_square.geo / joint_box.geo in a
+// rigid shear box: every node of the lower block fixed, every node of the upper block moving at
+// (vx, -vy) (2D; (vx, 0, -vy) in 3D), so that the joint closes and slides uniformly. Returns the
+// joint's shear and normal stress (the lower block's reactions over the joint's area) per
+// history row. `joint`: the joint's interface material; the other interfaces' (none here, with
+// "regions": []) has phi 20 degrees, so that the contact friction's default is not the joint's.
+struct Stresses {
+  double tau, sigma;
+};
+
+std::vector<Stresses> direct_shear(int dim, const json& joint, double vx, double vy, double end_time,
+                                   const std::string& dir) {
+  json doc = json::parse(R"({
+    "name": "direct_shear",
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
+    "regions": {"lower": "rock", "upper": "rock"},
+    "interface_materials": {
+      "rock_if": {"kn": 1e11, "ks": 1e11, "ft": 5e6, "c": 10e6, "phi_deg": 20, "Gnc": 10, "Gsc": 100}},
+    "fracture": {"regions": [], "interface_material": "rock_if", "surfaces": {"joint": "joint_if"}},
+    "damping": {"local": 0}
+  })");
+  doc["interface_materials"]["joint_if"] = joint;
+  doc["dimension"] = dim;
+  doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
+  if (dim == 2) doc["analysis"] = {{"plane", "strain"}, {"thickness", 1.0}};
+  const json v = dim == 2 ? json::array({vx, -vy}) : json::array({vx, 0.0, -vy});
+  doc["boundary"] = {{"fixed", {{{"set", "region.lower"}}}},
+                     {"velocity", {{{"set", "region.upper"}, {"velocity", v}}}}};
+  doc["time"] = {{"end_time", end_time}, {"safety_factor", 0.5}};
+  doc["output"] = {{"history_rows", 4000}, {"snapshot_count", 0}};
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.json") << doc.dump(2);
+  const std::string env = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
+  const int st = fdem::test::system_status(env + FDEM_BINARY + " run " + dir + "/case.json --out " + dir +
+                                           "/out --quiet > " + dir + "/run.log 2>&1");
+  EXPECT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+  // the lower block's reaction: x (shear), and y (2D) or z (3D) (normal)
+  std::istringstream in(fdem::test::slurp(dir + "/out/history.csv"));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> cols;
+  {
+    std::istringstream h(line);
+    for (std::string s; std::getline(h, s, ',');) cols.push_back(s);
+  }
+  const std::string nname = std::string("region.lower_reaction_") + (dim == 2 ? "y" : "z") + " [N]";
+  const long ix = std::find(cols.begin(), cols.end(), "region.lower_reaction_x [N]") - cols.begin();
+  const long iy = std::find(cols.begin(), cols.end(), nname) - cols.begin();
+  EXPECT_LT(ix, static_cast<long>(cols.size())) << line;
+  EXPECT_LT(iy, static_cast<long>(cols.size())) << line;
+  const double area = 0.1 * (dim == 2 ? 1.0 : 0.1);
+  std::vector<Stresses> rows;
+  while (std::getline(in, line)) {
+    std::vector<double> row;
+    std::istringstream r(line);
+    for (std::string s; std::getline(r, s, ',');) row.push_back(std::stod(s));
+    if (static_cast<long>(row.size()) > std::max(ix, iy))
+      rows.push_back({std::abs(row[ix]) / area, std::abs(row[iy]) / area});
+  }
+  return rows;
+}
+
+// A cohesive joint (c = 1 MPa, phi = 30 degrees): the peak shear stress is c + sigma_n tan(phi),
+// sigma_n of the same history row, at normal stresses of about 1, 2 and 4 MPa at the peak.
+void check_cohesive_joint(int dim) {
+  const std::string dir = fdem::test::scratch_dir("joints", "shear" + std::to_string(dim));
+  const double c = 1e6, tanphi = std::tan(30 * M_PI / 180), k = 1e11, vx = 0.01;
+  const json joint = {{"kn", k}, {"ks", k}, {"ft", 1e6}, {"c", c}, {"phi_deg", 30}, {"Gnc", 1}, {"Gsc", 1}};
+  for (double s : {1e6, 2e6, 4e6}) {
+    const double t_peak = (c + s * tanphi) / (k * vx);  // the slip and the closure at the peak
+    const auto rows = direct_shear(dim, joint, vx, s / (k * t_peak), 1.3 * t_peak,
+                                   dir + "/s" + std::to_string(static_cast<int>(s / 1e6)));
+    ASSERT_FALSE(rows.empty());
+    const Stresses p = *std::max_element(rows.begin(), rows.end(),
+                                         [](const Stresses& a, const Stresses& b) { return a.tau < b.tau; });
+    std::printf(
+        "direct shear %dD, cohesive joint: sigma_n %.6g Pa, peak tau %.6g Pa, c + sigma_n tan(phi) %.6g Pa "
+        "(%+.3f %%)\n",
+        dim, p.sigma, p.tau, c + p.sigma * tanphi, 100 * (p.tau / (c + p.sigma * tanphi) - 1));
+    EXPECT_NEAR(p.sigma, s, 0.02 * s);                       // the stress the test aims at
+    EXPECT_NEAR(p.tau, c + p.sigma * tanphi, 0.01 * p.tau);  // Mohr-Coulomb peak within 1 %
+    EXPECT_LT(rows.back().tau, 0.01 * p.tau);                // failed: no shear until it slides by dpen
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// A purely frictional joint (ft = c = 0, phi = 35 degrees): handed over to contact from the
+// start, it slides at sigma_n tan(phi) with the joint's friction, not the contact default (tan 20
+// degrees here), at normal stresses of 1, 2 and 4 MPa at the end.
+void check_frictional_joint(int dim) {
+  const std::string dir = fdem::test::scratch_dir("joints", "friction" + std::to_string(dim));
+  // the slip rate is high enough for the shear spring (contact ks = 1e11 Pa/m) to reach the
+  // friction limit at once: the joint slides from the start
+  const double tanphi = std::tan(35 * M_PI / 180), kc = 1e11, vx = 0.1, end = 1e-3;
+  const json joint = {{"kn", kc}, {"ks", kc}, {"ft", 0}, {"c", 0}, {"phi_deg", 35}};
+  for (double s : {1e6, 2e6, 4e6}) {
+    const auto rows = direct_shear(dim, joint, vx, s / (kc * end), end,
+                                   dir + "/s" + std::to_string(static_cast<int>(s / 1e6)));
+    ASSERT_GT(rows.size(), 10u);
+    const Stresses e = rows.back();
+    std::printf(
+        "direct shear %dD, frictional joint: sigma_n %.6g Pa, tau %.6g Pa, sigma_n tan(phi) %.6g Pa (%+.3f "
+        "%%)\n",
+        dim, e.sigma, e.tau, e.sigma * tanphi, 100 * (e.tau / (e.sigma * tanphi) - 1));
+    // about the contact kn (the default: rock_if's kn) times the closure; more in 3D, where a
+    // node on the joint's edge counts its share of the block's side faces in its contact area
+    // (+43 % on this 4 x 4 face mesh, +14 % at 8 x 8)
+    EXPECT_GT(e.sigma, 0.95 * s);
+    EXPECT_LT(e.sigma, (dim == 2 ? 1.05 : 1.5) * s);
+    EXPECT_NEAR(e.tau, e.sigma * tanphi, 0.01 * e.tau);
+    // sliding all along: the ratio holds over the second half of the run too
+    for (size_t i = rows.size() / 2; i < rows.size(); i += rows.size() / 10)
+      EXPECT_NEAR(rows[i].tau, rows[i].sigma * tanphi, 0.01 * rows[i].tau + 1.0) << "row " << i;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Joints, DirectShearPeakIsCohesionPlusFriction2D) { check_cohesive_joint(2); }
+TEST(Joints, DirectShearPeakIsCohesionPlusFriction3D) { check_cohesive_joint(3); }
+TEST(Joints, FrictionalJointSlidesAtItsOwnFriction2D) { check_frictional_joint(2); }
+TEST(Joints, FrictionalJointSlidesAtItsOwnFriction3D) { check_frictional_joint(3); }
+
+}  // namespace
