@@ -90,6 +90,7 @@ struct CliOptions {
   std::vector<std::string> sets;
   bool quiet = false;
   bool kernel_times = false;
+  bool moduli = false;
   double checkpoint_every = -1;
   std::string restart;
 };
@@ -129,6 +130,9 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   auto* check = app.add_subcommand("check", "validate a case file and its mesh without running");
   check->add_option("case", o.case_path, "case file (JSON)")->required();
   check->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
+  check->add_flag("--moduli", o.moduli,
+                  "also the effective elastic moduli of the mesh with its interfaces (a static solve; "
+                  "docs/case-format.md)");
 
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
 }
@@ -139,7 +143,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
     if (app.got_subcommand("info")) {
       print_info();
     } else if (app.got_subcommand("check")) {
-      auto report = fdem::check_case(o.case_path, o.sets);
+      auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
       std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
     } else if (app.got_subcommand("run")) {
       fdem::RunOptions opt;

@@ -11,6 +11,7 @@
 #include "io/output.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
+#include "solver/homogenise.hpp"
 #include "solver/interface_materials.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
@@ -139,7 +140,7 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
                     : run_dim<3>(c, std::move(mesh), out, opt, id, r);
 }
 
-nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides) {
+nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides, bool moduli) {
   Case c = load_case(case_path, overrides);
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
@@ -155,6 +156,7 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
   };
   if (c.dim == 2) add_dt(Simulation<2>(c, mesh));
   else add_dt(Simulation<3>(c, mesh));
+  if (moduli) report["effective_moduli"] = effective_moduli_report(c, effective_moduli(c, mesh));
   return report;
 }
 

@@ -31,6 +31,7 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt);
 
 // Validates a case file and its mesh without running it; returns a short report (counts, mesh
 // quality, stable time step). Throws InputError.
-nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides);
+nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides,
+                          bool moduli = false);
 
 }  // namespace fdem
