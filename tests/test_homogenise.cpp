@@ -31,7 +31,8 @@ TEST(EffectiveModuli, ContinuumIsExactInPlaneStrainPlaneStressAnd3D) {
     const fdem::HostMesh m = fdem::generate_crossed_rectangle(0, 0, 0.2, 0.1, 8, 4);
     const EffectiveModuli r = fdem::effective_moduli(c, m);
     const auto& S = r.compliance;
-    const double a = plane_stress ? 1 / E : (1 - nu * nu) / E, b = plane_stress ? -nu / E : -nu * (1 + nu) / E;
+    const double a = plane_stress ? 1 / E : (1 - nu * nu) / E,
+                 b = plane_stress ? -nu / E : -nu * (1 + nu) / E;
     expect_rel(S[0][0], a, 1e-8, "S_xx");
     expect_rel(S[1][1], a, 1e-8, "S_yy");
     expect_rel(S[0][1], b, 1e-8, "S_xy");
@@ -74,15 +75,17 @@ TEST(EffectiveModuli, CrossedMeshWithInterfacesFollowsItsClosedForm) {
     fdem::insert_interfaces(m, {true});
     const EffectiveModuli r = fdem::effective_moduli(c, m);
     auto modulus = [&](int n) {
-      return 1 / ((1 - nu * nu) / E + (1 / d) * ((n - 1.0) / n / k.kn + (1 / k.kn + 1 / k.ks) / std::sqrt(2.0)));
+      return 1 /
+             ((1 - nu * nu) / E + (1 / d) * ((n - 1.0) / n / k.kn + (1 / k.kn + 1 / k.ks) / std::sqrt(2.0)));
     };
     const double Ex = modulus(nx), Ey = modulus(ny), Einf = modulus(1 << 30);
     const double lat = Ex * (nu * (1 + nu) / E + (1 / k.ks - 1 / k.kn) / (std::sqrt(2.0) * d));
     const nlohmann::json j = fdem::effective_moduli_report(c, r);
-    std::printf("crossed mesh %dx%d, kn %.3g, ks %.3g: E_x %.6g Pa (closed form %.6g), E_y %.6g (%.6g), "
-                "many cells %.4g = %.3f E; lateral/axial %.5f (%.5f); CG %d iterations\n",
-                nx, ny, k.kn, k.ks, 1 / r.compliance[0][0], Ex, 1 / r.compliance[1][1], Ey, Einf, Einf / E,
-                -r.compliance[0][1] / r.compliance[0][0], lat, r.iterations);
+    std::printf(
+        "crossed mesh %dx%d, kn %.3g, ks %.3g: E_x %.6g Pa (closed form %.6g), E_y %.6g (%.6g), "
+        "many cells %.4g = %.3f E; lateral/axial %.5f (%.5f); CG %d iterations\n",
+        nx, ny, k.kn, k.ks, 1 / r.compliance[0][0], Ex, 1 / r.compliance[1][1], Ey, Einf, Einf / E,
+        -r.compliance[0][1] / r.compliance[0][0], lat, r.iterations);
     expect_rel(1 / r.compliance[0][0], Ex, 1e-6, "E_x");
     expect_rel(1 / r.compliance[1][1], Ey, 1e-6, "E_y");
     expect_rel(-r.compliance[0][1] / r.compliance[0][0], lat, 1e-6, "lateral / axial");

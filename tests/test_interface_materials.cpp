@@ -6,6 +6,7 @@
 #include <hdf5.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -181,6 +182,63 @@ TEST(InterfaceMaterials, ScatterHasMeanOneTheStatedSpreadAndIsReproducible) {
 
 // A scatter changes each interface's strength by its factor: a bar whose weak region has a
 // strength scatter fails at the weakest of its interfaces' strengths.
+// A correlated scatter (fracture.scatter.correlation_length): the underlying normal field has
+// mean 0, variance 1 and the correlation exp(-r^2 / l^2) at r = l / 2, l, 2 l (over 40 000 pairs
+// in a square 60 l wide: the field's spatial averages, one realisation of its 256 modes); the
+// factors keep the distribution's mean 1 and coefficient of variation; the same seed gives the
+// same field, another seed another.
+TEST(InterfaceMaterials, CorrelatedScatterHasItsCorrelationLengthAndDistribution) {
+  StrengthScatter s{"weibull", 5, 0, 0.1, 10, 7, false};
+  s.correlation_length = 0.01;
+  const double l = s.correlation_length, side = 60 * l;
+  const CorrelatedField g(s, 2);
+  const int n = 40000;
+  for (double r : {0.5 * l, l, 2 * l}) {
+    double sum = 0, sum2 = 0, prod = 0;
+    for (int i = 0; i < n; ++i) {
+      // points on a low-discrepancy sequence, each with a partner at distance r in a turning direction
+      const double x[2] = {side * std::fmod(i * 0.7548776662, 1.0), side * std::fmod(i * 0.5698402910, 1.0)};
+      const double th = 2.399963 * i;
+      const double y[2] = {x[0] + r * std::cos(th), x[1] + r * std::sin(th)};
+      const double a = g.gaussian(x), b = g.gaussian(y);
+      sum += a;
+      sum2 += a * a;
+      prod += a * b;
+    }
+    EXPECT_NEAR(sum / n, 0.0, 0.05);
+    EXPECT_NEAR(sum2 / n, 1.0, 0.08);
+    std::printf("correlated field: r / l = %.1f: mean %.4f, variance %.4f, correlation %.4f (target %.4f)\n",
+                r / l, sum / n, sum2 / n, prod / n, std::exp(-r * r / (l * l)));
+    EXPECT_NEAR(prod / n, std::exp(-r * r / (l * l)), 0.06) << "r = " << r;
+  }
+  // the factors: Weibull m = 5 (mean 1, cov 0.2291) and the truncated normal's mean 1
+  double m1 = 0, m2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const double x[2] = {side * std::fmod(i * 0.7548776662, 1.0), side * std::fmod(i * 0.5698402910, 1.0)};
+    const double w = factor_from_gaussian(s, g.gaussian(x));
+    m1 += w / n;
+    m2 += w * w / n;
+  }
+  std::printf("correlated Weibull m = 5: mean %.4f, cov %.4f (0.2291)\n", m1, std::sqrt(m2 - m1 * m1) / m1);
+  EXPECT_NEAR(m1, 1.0, 0.03);
+  EXPECT_NEAR(std::sqrt(m2 - m1 * m1) / m1, 0.2291, 0.03);
+  const StrengthScatter tn{"normal", 0, 0.3, 0.5, 1.5, 7, false};
+  double mt = 0;
+  for (int i = 0; i < 2001; ++i) {
+    const double w = factor_from_gaussian(tn, -4.0 + 0.004 * i);
+    EXPECT_GE(w, 0.5 - 1e-9);  // within the truncation (symmetric about 1: the mean is 1 already)
+    EXPECT_LE(w, 1.5 + 1e-9);
+    mt += w * std::exp(-0.5 * std::pow(-4.0 + 0.004 * i, 2)) * 0.004 / std::sqrt(2 * M_PI);
+  }
+  EXPECT_NEAR(mt, 1.0, 1e-3);  // the mean over the normal field's distribution
+  // reproducible, and another seed is another field
+  const double p[2] = {0.123, 0.456};
+  EXPECT_EQ(CorrelatedField(s, 2).gaussian(p), g.gaussian(p));
+  StrengthScatter s2 = s;
+  s2.seed = 8;
+  EXPECT_NE(CorrelatedField(s2, 2).gaussian(p), g.gaussian(p));
+}
+
 TEST(InterfaceMaterials, ScatteredBarFailsAtItsWeakestInterface) {
   Case c = two_region_case(2e6, 8e6);
   c.region_iface_material.clear();
@@ -256,6 +314,8 @@ TEST(InterfaceMaterials, CaseReaderReadsRulesAndNamesBadOnes) {
   EXPECT_TRUE(has(e, "fracture.scatter.modulus")) << e;
   e = error_of("scatter", json{{"distribution", "normal"}, {"cov", 0.2}, {"lower", 1.5}});
   EXPECT_TRUE(has(e, "fracture.scatter.lower")) << e;
+  e = error_of("scatter", json{{"distribution", "weibull"}, {"modulus", 5}, {"correlation_length", 0}});
+  EXPECT_TRUE(has(e, "fracture.scatter.correlation_length")) << e;
 }
 
 // `fdem check` counts the interfaces per material on a Gmsh mesh of two regions; `fdem run`

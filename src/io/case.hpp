@@ -45,6 +45,9 @@ struct StrengthScatter {
   double lower = 0.1, upper = 10;  // normal: truncation of w before the mean is restored
   unsigned long long seed = 1;
   bool energy = false;  // scale the fracture energies with the strength
+  // > 0: a spatially correlated field (Gaussian correlation exp(-r^2 / l^2) of the underlying
+  // normal field, this l in m) instead of independent draws; 0: independent
+  double correlation_length = 0;
 };
 
 // Fixed or prescribed-velocity components of a node set. Fixed is velocity 0.

@@ -171,7 +171,7 @@ void read_materials_by_place(json& f, Case& c, const Reader& R, const std::vecto
 void read_scatter(json& f, Case& c, const Reader& R) {
   json& s = R.object(f, "fracture", "scatter", false);
   const std::string p = "fracture.scatter";
-  R.keys(s, p, {"distribution", "modulus", "cov", "lower", "upper", "seed", "energy"});
+  R.keys(s, p, {"distribution", "modulus", "cov", "lower", "upper", "seed", "energy", "correlation_length"});
   StrengthScatter& sc = c.scatter;
   sc.distribution = R.string(s, p, "distribution");
   if (sc.distribution == "weibull") {
@@ -186,6 +186,7 @@ void read_scatter(json& f, Case& c, const Reader& R) {
     R.fail(p + ".distribution", "must be \"weibull\" or \"normal\" (got \"" + sc.distribution + "\")");
   }
   sc.seed = static_cast<unsigned long long>(R.integer(s, p, "seed", 0, 4294967295L, 1));
+  if (s.contains("correlation_length")) sc.correlation_length = R.number(s, p, "correlation_length", gt(0));
   if (s.contains("energy")) {
     if (!s["energy"].is_boolean()) R.fail(p + ".energy", "must be true or false");
     sc.energy = s["energy"].get<bool>();

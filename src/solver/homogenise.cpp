@@ -25,8 +25,10 @@ constexpr int kVoigt3[6][2] = {{0, 0}, {1, 1}, {2, 2}, {1, 2}, {0, 2}, {0, 1}};
 
 template <int D>
 const int (&voigt(int J))[2] {
-  if constexpr (D == 2) return kVoigt2[J];
-  else return kVoigt3[J];
+  if constexpr (D == 2)
+    return kVoigt2[J];
+  else
+    return kVoigt3[J];
 }
 
 // Linear elastic stiffness of each element (small strain, Lame constants of its material; plane
@@ -38,7 +40,8 @@ double bulk_stiffness(const Case& c, const HostMesh& mesh, Triplets& t) {
   double volume = 0;
   for (int e = 0; e < mesh.num_elems(); ++e) {
     const auto it = c.region_material.find(mesh.region_names[mesh.elem_region[e]]);
-    if (it == c.region_material.end()) throw InputError(c.file + ": regions: an element's region has no material");
+    if (it == c.region_material.end())
+      throw InputError(c.file + ": regions: an element's region has no material");
     const BulkMaterial& bm = c.materials[it->second];
     const double mu = bm.E / (2 * (1 + bm.nu));
     double lam = bm.E * bm.nu / ((1 + bm.nu) * (1 - 2 * bm.nu));
@@ -47,7 +50,9 @@ double bulk_stiffness(const Case& c, const HostMesh& mesh, Triplets& t) {
     // shape gradients: g[a][j] = dN_a / dX_j from the inverse of the edge matrix
     double A[D][D], inv[D][D], g[D + 1][D];
     for (int b = 0; b < D; ++b)
-      for (int j = 0; j < D; ++j) A[j][b] = mesh.X[static_cast<std::size_t>(nd[b + 1]) * D + j] - mesh.X[static_cast<std::size_t>(nd[0]) * D + j];
+      for (int j = 0; j < D; ++j)
+        A[j][b] = mesh.X[static_cast<std::size_t>(nd[b + 1]) * D + j] -
+                  mesh.X[static_cast<std::size_t>(nd[0]) * D + j];
     double det;
     if constexpr (D == 2) {
       det = A[0][0] * A[1][1] - A[0][1] * A[1][0];
@@ -56,7 +61,8 @@ double bulk_stiffness(const Case& c, const HostMesh& mesh, Triplets& t) {
       inv[1][0] = -A[1][0] / det;
       inv[1][1] = A[0][0] / det;
     } else {
-      det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) - A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+      det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+            A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
             A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) {
@@ -182,7 +188,8 @@ EffectiveModuli solve(const Case& c, const HostMesh& mesh) {
       for (int a = 0; a < D; ++a)
         for (int i = 0; i < D; ++i) um[i] += u[static_cast<long>(faces[q * D + a]) * D + i] / D;
       for (int i = 0; i < D; ++i)
-        for (int j = 0; j < D; ++j) eps[i][j] += 0.5 * (um[i] * nA[q * D + j] + um[j] * nA[q * D + i]) / volume;
+        for (int j = 0; j < D; ++j)
+          eps[i][j] += 0.5 * (um[i] * nA[q * D + j] + um[j] * nA[q * D + i]) / volume;
     }
     for (int I = 0; I < NV; ++I) {
       const int i = voigt<D>(I)[0], j = voigt<D>(I)[1];

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "kernels/host_loops.hpp"
 
 namespace fdem {
 
@@ -32,7 +33,60 @@ double uniform(std::uint64_t seed, long q, int draw) {
 double normal_pdf(double x) { return std::exp(-0.5 * x * x) / std::sqrt(2 * M_PI); }
 double normal_cdf(double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); }
 
+// Standard normal from (seed, q, draw, draw + 1) (Box-Muller).
+double gauss(std::uint64_t seed, long q, int draw) {
+  return std::sqrt(-2 * std::log(uniform(seed, q, draw))) * std::cos(2 * M_PI * uniform(seed, q, draw + 1));
+}
+
+// The standard normal quantile: bisection on normal_cdf (host, set-up only).
+double normal_quantile(double u) {
+  double lo = -40, hi = 40;
+  for (int i = 0; i < 200 && hi - lo > 1e-13; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (normal_cdf(mid) < u ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace
+
+CorrelatedField::CorrelatedField(const StrengthScatter& s, int dim) : dim_(dim) {
+  k_.resize(static_cast<std::size_t>(kModes) * dim);
+  phase_.resize(kModes);
+  // the modes draw from interface indices -1, -2, ... (the independent factors use q >= 0)
+  for (int i = 0; i < kModes; ++i) {
+    for (int d = 0; d < dim; ++d)
+      k_[static_cast<std::size_t>(i) * dim + d] =
+          std::sqrt(2.0) / s.correlation_length * gauss(s.seed, -1 - i, 2 * d);
+    phase_[i] = 2 * M_PI * uniform(s.seed, -1 - i, 2 * dim);
+  }
+}
+
+double CorrelatedField::gaussian(const double* x) const {
+  double g = 0;
+  for (int i = 0; i < kModes; ++i) {
+    double a = phase_[i];
+    for (int d = 0; d < dim_; ++d) a += k_[static_cast<std::size_t>(i) * dim_ + d] * x[d];
+    g += std::cos(a);
+  }
+  return g * std::sqrt(2.0 / kModes);
+}
+
+double factor_from_gaussian(const StrengthScatter& s, double g) {
+  if (s.distribution == "weibull") {
+    const double lambda = 1.0 / std::tgamma(1.0 + 1.0 / s.modulus);
+    const double tail = normal_cdf(-g);  // 1 - Phi(g), accurate far out in the upper tail
+    return lambda * std::pow(-std::log(tail), 1.0 / s.modulus);
+  }
+  if (s.distribution == "normal") {
+    const double a = (s.lower - 1.0) / s.cov, b = (s.upper - 1.0) / s.cov;
+    const double Pa = normal_cdf(a), Pb = normal_cdf(b);
+    const double mean = 1.0 + s.cov * (normal_pdf(a) - normal_pdf(b)) / (Pb - Pa);
+    const double z = normal_quantile(Pa + normal_cdf(g) * (Pb - Pa));  // truncated normal at Phi(g)
+    return (1.0 + s.cov * z) / mean;
+  }
+  return 1.0;
+}
 
 double strength_factor(const StrengthScatter& s, long q) {
   if (s.distribution == "weibull") {
@@ -106,7 +160,20 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
   if (scatter) {
     if (map.material.empty()) map.material.assign(ni, c.fracture_material);
     map.scale.resize(ni);
-    for (long q = 0; q < ni; ++q) map.scale[q] = static_cast<float>(strength_factor(c.scatter, q));
+    if (c.scatter.correlation_length > 0) {
+      // the field at each interface's centre (its side-A nodes' mean, reference positions)
+      const CorrelatedField field(c.scatter, mesh.dim);
+      const int D = mesh.dim;
+      host_for("fdem::correlated_strength", static_cast<int>(ni), [&](int q) {
+        double x[3] = {0, 0, 0};
+        for (int k = 0; k < D; ++k)
+          for (int i = 0; i < D; ++i)
+            x[i] += mesh.X[static_cast<std::size_t>(mesh.ifaces[2 * D * q + k]) * D + i] / D;
+        map.scale[q] = static_cast<float>(factor_from_gaussian(c.scatter, field.gaussian(x)));
+      });
+    } else {
+      for (long q = 0; q < ni; ++q) map.scale[q] = static_cast<float>(strength_factor(c.scatter, q));
+    }
   }
   return map;
 }
@@ -129,7 +196,8 @@ nlohmann::json interface_material_report(const Case& c, const InterfaceMaterialM
                              {"factor_mean", sum / map.scale.size()},
                              {"factor_min", lo},
                              {"factor_max", hi},
-                             {"energy_scaled", c.scatter.energy}};
+                             {"energy_scaled", c.scatter.energy},
+                             {"correlation_length_m", c.scatter.correlation_length}};
   }
   return j;
 }

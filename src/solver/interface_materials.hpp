@@ -29,6 +29,22 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
 // The strength factor of interface q for a scatter (mean 1), a pure function of (seed, q).
 double strength_factor(const StrengthScatter& s, long q);
 
+// A spatially correlated scatter (StrengthScatter::correlation_length l > 0): a standard normal
+// random field g(x) with correlation exp(-r^2 / l^2), the sum of kModes cosines with random
+// wave vectors (normal, variance 2 / l^2 per component) and phases, all from the seed; the factor
+// at x is the scatter's distribution at the probability Phi(g(x)) (factor_from_gaussian), so the
+// factors have the same distribution as the independent ones and the field's correlation.
+class CorrelatedField {
+ public:
+  static constexpr int kModes = 256;
+  CorrelatedField(const StrengthScatter& s, int dim);
+  double gaussian(const double* x) const;  // g at the point x (dim coordinates)
+ private:
+  int dim_;
+  std::vector<double> k_, phase_;
+};
+double factor_from_gaussian(const StrengthScatter& s, double g);
+
 // For `fdem check` and summary.json: {"<material>": interfaces, ...} of the materials in use and,
 // with a scatter, "strength_scatter": distribution, mean, min and max of the factors.
 nlohmann::json interface_material_report(const Case& c, const InterfaceMaterialMap& map);
