@@ -142,18 +142,7 @@ std::vector<char> cut_faces(const HostMesh& mesh, const std::vector<std::string>
 }
 
 // Union-find over element node slots (e * (dim + 1) + a).
-struct Slots {
-  std::vector<int> up;
-  int find(int i) {
-    while (up[i] != i) i = up[i] = up[up[i]];
-    return i;
-  }
-  void join(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) up[a > b ? a : b] = a < b ? a : b;
-  }
-};
+using Slots = UnionFind;
 
 // For the nodes on a cut face of a non-fracturable element: the slots of the non-fracturable
 // elements around each such node joined where two of them share a face that is not cut (the
@@ -161,7 +150,7 @@ struct Slots {
 Slots cut_sides(const HostMesh& mesh, const std::vector<bool>& fracturable, const std::vector<int>& neighbour,
                 const std::vector<char>& cut, std::vector<char>& on_cut) {
   const int dim = mesh.dim, npe = dim + 1, ne = mesh.num_elems();
-  Slots u;
+  Slots u(ne * npe);
   on_cut.assign(mesh.num_nodes(), 0);
   auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
   for (int e = 0; e < ne; ++e)
@@ -169,8 +158,6 @@ Slots cut_sides(const HostMesh& mesh, const std::vector<bool>& fracturable, cons
       if (cut[static_cast<std::size_t>(e) * npe + f] && !frac(e))
         for (int k = 0; k < dim; ++k)
           on_cut[mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, k)]] = 1;
-  u.up.resize(static_cast<std::size_t>(ne) * npe);
-  for (std::size_t i = 0; i < u.up.size(); ++i) u.up[i] = static_cast<int>(i);
   for (int e = 0; e < ne; ++e) {
     if (frac(e)) continue;
     for (int f = 0; f < npe; ++f) {

@@ -20,19 +20,7 @@ namespace {
 
 using mesh_detail::fmt;
 
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void join(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
+using mesh_detail::UnionFind;
 
 // Cells of size `h` keyed by their integer coordinates (21 bits each, wrapped: a collision only
 // adds candidates, which the exact tests then reject).

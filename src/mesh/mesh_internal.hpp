@@ -77,4 +77,21 @@ std::string signal_name(int sig);
 // Format a double compactly (like %g with 6 significant digits).
 std::string fmt(double v);
 
+// Union-find over 0..n-1 with path halving; a set's root is its smallest member.
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n = 0) : parent(n) {
+    for (int i = 0; i < n; ++i) parent[i] = i;
+  }
+  int find(int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  }
+  void join(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[a > b ? a : b] = a < b ? a : b;
+  }
+};
+
 }  // namespace fdem::mesh_detail
