@@ -34,11 +34,6 @@ void visit_pairs(const PairList<D>& P, F&& f) {
 
 }  // namespace
 
-bool contact_wanted(const Case& c, const HostMesh& mesh) {
-  if (c.contact.enabled >= 0) return c.contact.enabled == 1;
-  return mesh.num_ifaces() > 0 || count_bodies(mesh) > 1;
-}
-
 template <int D>
 ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m,
                                 const std::vector<double>& mass) {
@@ -66,18 +61,12 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   // candidate lists by a local search (update_lists; docs/performance-impact.md section 2). On
   // GPUs the check also costs a copy of the pending flag to the host.
   check_every_ = 25;
-  start_with_joints(m);
+  if (m.ifric.extent(0) > 0) {  // frictional joints, handed over from the start: their own friction
+    surf_.fmu = Kokkos::View<double*>("fdem::contact::fmu", nf_);
+    joint_friction_ = joint_face_friction<D>(surf_, m.ifric, nf_) > 0;
+    may_meet_ = true;  // the pieces they separate may meet
+  }
   refresh_surfaces(m);
-}
-
-// Frictional joints (Model::ifric) are handed over from the start: their faces take the joint's
-// friction, and two pieces that they separate may meet.
-template <int D>
-void ContactSystem<D>::start_with_joints(const Model<D>& m) {
-  if (m.ifric.extent(0) == 0) return;
-  surf_.fmu = Kokkos::View<double*>("fdem::contact::fmu", nf_);
-  joint_friction_ = joint_face_friction<D>(surf_, m.ifric, nf_) > 0;
-  may_meet_ = true;
 }
 
 // Parameters (docs/case-format.md, "contact").

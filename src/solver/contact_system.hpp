@@ -53,10 +53,6 @@ namespace fdem {
 // Label of the device values the contact system reads on its re-check steps (tests/test_gpu_ready.cpp).
 inline constexpr char kContactSyncLabel[] = "fdem::contact::sync";
 
-// The 'enabled' rule of the case's contact object: on/off as given; "auto" (default): on when the
-// mesh has interfaces or more than one body (connected piece of elements).
-bool contact_wanted(const Case& c, const HostMesh& mesh);
-
 template <int D>
 class ContactSystem {
  public:
@@ -143,8 +139,6 @@ class ContactSystem {
   void allocate_work();
   // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
   void refresh_surfaces(const Model<D>& m);
-  // Frictional joints (Model::ifric): per-face friction, and the pieces may meet from the start.
-  void start_with_joints(const Model<D>& m);
   // After a handover (surfaces refreshed; before_: the surfaces of the lists): the lists updated by
   // a local search at the build positions, when every surface node is within half the skin of its
   // build position (else need_build_ stays set).

@@ -55,6 +55,11 @@ int count_bodies(const HostMesh& mesh) {
   return n;
 }
 
+bool contact_wanted(const Case& c, const HostMesh& mesh) {
+  if (c.contact.enabled >= 0) return c.contact.enabled == 1;
+  return mesh.num_ifaces() > 0 || count_bodies(mesh) > 1;
+}
+
 namespace {
 
 struct KeyHash {

@@ -38,6 +38,10 @@ struct HostVertexGroups {
 // Connected pieces of the mesh: elements joined by shared nodes or by interfaces.
 int count_bodies(const HostMesh& mesh);
 
+// The 'enabled' rule of the case's contact object: on/off as given; "auto" (default): on when the
+// mesh has interfaces or more than one body (connected piece of elements).
+bool contact_wanted(const Case& c, const HostMesh& mesh);
+
 // The faces (InputError, naming c.file, when a face has no element).
 template <int D>
 ContactFaces contact_faces(const Case& c, const HostMesh& mesh);
