@@ -1,5 +1,8 @@
 #include "solver/homogenise.hpp"
 
+// Eigen runs on the host only here: without EIGEN_NO_CUDA, nvcc (CUDA builds) makes Eigen mark its
+// functions __host__ __device__, which CUDA 13 warns about (#20012-D, #20015-D) in Eigen 3.4.
+#define EIGEN_NO_CUDA
 #include <Eigen/IterativeLinearSolvers>
 #include <Eigen/SparseCore>
 
