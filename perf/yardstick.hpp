@@ -23,6 +23,40 @@
 
 namespace fdem_bench {
 
+// Inverse masses and the interfaces' reference normals of the yardstick (a free function: CUDA
+// does not allow a device lambda in a constructor).
+template <int D>
+void yardstick_setup(const fdem::Model<D>& m, const Kokkos::View<double*>& minv,
+                     const Kokkos::View<double* [D]>& nrm) {
+  const int nn = m.nn, ni = m.ni;
+  const auto mass = m.mass;
+  const auto mi = minv;
+  Kokkos::parallel_for(
+      "ys::minv", Kokkos::RangePolicy<fdem::ExecSpace>(0, nn),
+      KOKKOS_LAMBDA(const int i) { mi(i) = mass(i) > 0 ? 1.0 / mass(i) : 0.0; });
+  const auto X = m.X;
+  const auto ifc = m.iface;
+  const auto n = nrm;
+  Kokkos::parallel_for(
+      "ys::normals", Kokkos::RangePolicy<fdem::ExecSpace>(0, ni), KOKKOS_LAMBDA(const int q) {
+        double t[D], s[D], nq[D];
+        for (int i = 0; i < D; ++i) t[i] = X(ifc(q, 1), i) - X(ifc(q, 0), i);
+        if constexpr (D == 2) {
+          nq[0] = t[1];
+          nq[1] = -t[0];
+        } else {
+          for (int i = 0; i < D; ++i) s[i] = X(ifc(q, 2), i) - X(ifc(q, 0), i);
+          nq[0] = t[1] * s[2] - t[2] * s[1];
+          nq[1] = t[2] * s[0] - t[0] * s[2];
+          nq[2] = t[0] * s[1] - t[1] * s[0];
+        }
+        double l = 0;
+        for (int i = 0; i < D; ++i) l += nq[i] * nq[i];
+        l = l > 0 ? 1.0 / fdem::kmath::sqrt(l) : 0.0;
+        for (int i = 0; i < D; ++i) n(q, i) = nq[i] * l;
+      });
+}
+
 template <int D>
 struct Yardstick {
   using View2 = Kokkos::View<double* [D]>;
@@ -59,32 +93,7 @@ struct Yardstick {
     nbc = (ne + fdem::kChunk - 1) / fdem::kChunk;
     fused = fdem::kChunk > 1 && static_cast<int>(ichunk.extent(0)) == nbc + 1;
     Kokkos::deep_copy(v, m.v);
-    const auto mass = m.mass;
-    const auto mi = minv;
-    Kokkos::parallel_for(
-        "ys::minv", Kokkos::RangePolicy<fdem::ExecSpace>(0, nn),
-        KOKKOS_LAMBDA(const int i) { mi(i) = mass(i) > 0 ? 1.0 / mass(i) : 0.0; });
-    const auto X = m.X;
-    const auto ifc = iface;
-    const auto n = nrm;
-    Kokkos::parallel_for(
-        "ys::normals", Kokkos::RangePolicy<fdem::ExecSpace>(0, ni), KOKKOS_LAMBDA(const int q) {
-          double t[D], s[D], nq[D];
-          for (int i = 0; i < D; ++i) t[i] = X(ifc(q, 1), i) - X(ifc(q, 0), i);
-          if constexpr (D == 2) {
-            nq[0] = t[1];
-            nq[1] = -t[0];
-          } else {
-            for (int i = 0; i < D; ++i) s[i] = X(ifc(q, 2), i) - X(ifc(q, 0), i);
-            nq[0] = t[1] * s[2] - t[2] * s[1];
-            nq[1] = t[2] * s[0] - t[0] * s[2];
-            nq[2] = t[0] * s[1] - t[1] * s[0];
-          }
-          double l = 0;
-          for (int i = 0; i < D; ++i) l += nq[i] * nq[i];
-          l = l > 0 ? 1.0 / fdem::kmath::sqrt(l) : 0.0;
-          for (int i = 0; i < D; ++i) n(q, i) = nq[i] * l;
-        });
+    yardstick_setup<D>(m, minv, nrm);
     Kokkos::fence();
   }
 
