@@ -354,6 +354,8 @@ TEST(InterfaceMaterials, CheckCountsThemAndSnapshotsShowThem) {
   const json& per = r["interfaces"]["interfaces_per_material"];
   // the mesh's 4 edges on x = 1 join the regions; the rest lie inside one of them
   EXPECT_EQ(per["itz"], 4);
+  // the unnamed physical curve 17 of the mesh is that line: its 4 interfaces, by surface
+  EXPECT_EQ(r["interfaces"]["interfaces_per_surface"]["group_17"], 4);
   EXPECT_EQ(per["strong"].get<long>() + per["weak_if"].get<long>() + 4, r["mesh"]["interfaces"].get<long>());
   EXPECT_GT(per["weak_if"].get<long>(), 10);
   EXPECT_NEAR(r["interfaces"]["strength_scatter"]["factor_mean"].get<double>(), 1.0, 0.1);

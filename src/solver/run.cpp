@@ -145,7 +145,11 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
-  if (mesh.num_ifaces() > 0) report["interfaces"] = interface_material_report(c, interface_material_map(c, mesh));
+  if (mesh.num_ifaces() > 0) {
+    report["interfaces"] = interface_material_report(c, interface_material_map(c, mesh));
+    for (const auto& [name, qs] : mesh.iface_sets)  // named curves or surfaces that interfaces lie on
+      if (!qs.empty()) report["interfaces"]["interfaces_per_surface"][name] = qs.size();
+  }
   const MemoryBudget mem = available_memory();
   report["memory"] = {{"estimated_bytes", mesh.num_elems() * bytes_per_element(c.dim)},
                       {"available_bytes", mem.bytes},
