@@ -1,6 +1,6 @@
-// Gmsh-based reader (.msh 2.2/4.1 ASCII or binary, .geo meshed on the fly) and the unstructured
-// generators (disc, sphere) through the Gmsh C++ API. The model's mesh becomes a HostMesh in
-// gmsh_extract.cpp.
+// Gmsh-based reader (.msh 2.2/4.1 ASCII or binary, .geo meshed on the fly) and the Gmsh session
+// of the unstructured generators (generate_with_gmsh; the disc and the sphere are in
+// gmsh_generators.cpp). The model's mesh becomes a HostMesh in gmsh_extract.cpp.
 #include <gmsh.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <mutex>
 #include <new>
@@ -458,14 +459,7 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
 
 namespace {
 
-void check_generator_args(const std::string& who, double R, double h) {
-  if (!(R > 0) || !std::isfinite(R)) throw InputError(who + ": radius must be positive (got " + fmt(R) + ")");
-  if (!(h > 0) || !std::isfinite(h))
-    throw InputError(who + ": element_size must be positive (got " + fmt(h) + ")");
-  if (h > R) throw InputError(who + ": element_size " + fmt(h) + " is larger than the radius " + fmt(R));
-}
-
-void set_mesh_size(double h) {
+void set_mesh_size(double h, int algorithm3d) {
   gmsh::option::setNumber("Mesh.CharacteristicLengthMin", 0.0);
   gmsh::option::setNumber("Mesh.CharacteristicLengthMax", h);
   gmsh::option::setNumber("Mesh.CharacteristicLengthFromCurvature", 0);
@@ -473,101 +467,34 @@ void set_mesh_size(double h) {
   // Delaunay: less regular than Frontal-Delaunay, whose rows of nearly aligned edges steer cracks
   // (Brazilian disc: the split followed the mesh rows, off the loaded diameter).
   gmsh::option::setNumber("Mesh.Algorithm", 5);
-  gmsh::option::setNumber("Mesh.Algorithm3D", 1);  // Delaunay
+  gmsh::option::setNumber("Mesh.Algorithm3D", algorithm3d);
   gmsh::option::setNumber("Mesh.ElementOrder", 1);
   gmsh::option::setNumber("Mesh.Optimize", 1);
 }
 
-HostMesh finish_generated(Extracted&& ex, const std::string& who) {
+}  // namespace
+
+namespace mesh_detail {
+
+HostMesh generate_with_gmsh(const std::string& who, const std::string& doing, int dim, double h,
+                            int algorithm3d, const std::function<void()>& build) {
+  Extracted ex = run_gmsh_isolated(who, doing, [&] {
+    return gmsh_call(who, doing, [&] {
+      build();
+      set_mesh_size(h, algorithm3d);
+      GmshTimes t;
+      timed(t.mesh, [&] { gmsh::model::mesh::generate(dim); });
+      Extracted e = timed(t.extract, [&] { return extract_model(dim, who); });
+      e.times = t;
+      return e;
+    });
+  });
+  check_size_honoured(ex.mesh, who, h);
   orient_positively(ex.mesh);
   check_elements_impl(ex.mesh, who, nullptr);
   return std::move(ex.mesh);
 }
 
-}  // namespace
-
-HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region, double dx,
-                       double dy) {
-  const std::string who = "disc generator";
-  check_generator_args(who, R, h);
-  if (R / h > 5000)
-    throw InputError(who + ": radius / element_size = " + fmt(R / h) +
-                     " is above the limit 5000: give mesh.element_size >= " + fmt(R / 5000));
-  const std::string rname = region.empty() ? std::string("body") : region;
-  Extracted ex = run_gmsh_isolated(who, "mesh the disc", [&] {
-    return gmsh_call(who, "mesh the disc", [&] {
-      gmsh::model::add("disc");
-      const int s = gmsh::model::occ::addDisk(cx, cy, 0.0, R, R);
-      std::vector<int> surfaces{s};
-      const double len = std::sqrt(dx * dx + dy * dy);
-      if (len > 0) {  // the diameter along (dx, dy): the disc cut into two halves that share it
-        const double ux = R * dx / len, uy = R * dy / len;
-        const int a = gmsh::model::occ::addPoint(cx + ux, cy + uy, 0.0);
-        const int b = gmsh::model::occ::addPoint(cx - ux, cy - uy, 0.0);
-        const int l = gmsh::model::occ::addLine(a, b);
-        gmsh::vectorpair out;
-        std::vector<gmsh::vectorpair> map;
-        gmsh::model::occ::fragment({{2, s}}, {{1, l}}, out, map);
-        surfaces.clear();
-        for (const auto& [d, t] : out)
-          if (d == 2) surfaces.push_back(t);
-      }
-      gmsh::model::occ::synchronize();
-      gmsh::vectorpair faces, bnd;
-      for (int t : surfaces) faces.push_back({2, t});
-      gmsh::model::getBoundary(faces, bnd, len > 0, false, false);  // combined: the outer circle only
-      std::vector<int> curves;
-      for (const auto& [d, t] : bnd) curves.push_back(std::abs(t));
-      const int ps = gmsh::model::addPhysicalGroup(2, surfaces);
-      gmsh::model::setPhysicalName(2, ps, rname);
-      const int pc = gmsh::model::addPhysicalGroup(1, curves);
-      gmsh::model::setPhysicalName(1, pc, "boundary");
-      set_mesh_size(h);
-      GmshTimes t;
-      timed(t.mesh, [&] { gmsh::model::mesh::generate(2); });
-      Extracted ex = timed(t.extract, [&] { return extract_model(2, who); });
-      ex.times = t;
-      return ex;
-    });
-  });
-  check_size_honoured(ex.mesh, who, h);
-  return finish_generated(std::move(ex), who);
-}
-
-HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h, const std::string& region,
-                         const std::string& mesher) {
-  const std::string who = "sphere generator";
-  check_generator_args(who, R, h);
-  if (mesher != "delaunay" && mesher != "hxt")
-    throw InputError(who + ": unknown mesher '" + mesher + "' (allowed: delaunay, hxt)");
-  if (R / h > 200)
-    throw InputError(who + ": radius / element_size = " + fmt(R / h) +
-                     " is above the limit 200: give mesh.element_size >= " + fmt(R / 200));
-  const std::string rname = region.empty() ? std::string("body") : region;
-  Extracted ex = run_gmsh_isolated(who, "mesh the sphere", [&] {
-    return gmsh_call(who, "mesh the sphere", [&] {
-      gmsh::model::add("sphere");
-      const int v = gmsh::model::occ::addSphere(centre[0], centre[1], centre[2], R);
-      gmsh::model::occ::synchronize();
-      gmsh::vectorpair bnd;
-      gmsh::model::getBoundary({{3, v}}, bnd, false, false, false);
-      std::vector<int> surfs;
-      for (const auto& [d, t] : bnd) surfs.push_back(std::abs(t));
-      const int pv = gmsh::model::addPhysicalGroup(3, {v});
-      gmsh::model::setPhysicalName(3, pv, rname);
-      const int ps = gmsh::model::addPhysicalGroup(2, surfs);
-      gmsh::model::setPhysicalName(2, ps, "surface");
-      set_mesh_size(h);
-      if (mesher == "hxt") gmsh::option::setNumber("Mesh.Algorithm3D", 10);  // threads: General.NumThreads 1
-      GmshTimes t;
-      timed(t.mesh, [&] { gmsh::model::mesh::generate(3); });
-      Extracted ex = timed(t.extract, [&] { return extract_model(3, who); });
-      ex.times = t;
-      return ex;
-    });
-  });
-  check_size_honoured(ex.mesh, who, h);
-  return finish_generated(std::move(ex), who);
-}
+}  // namespace mesh_detail
 
 }  // namespace fdem

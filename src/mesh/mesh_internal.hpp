@@ -3,6 +3,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -73,6 +74,13 @@ std::string read_all(int fd);
 std::string log_excerpt(std::FILE* log);
 void cap_address_space();
 std::string signal_name(int sig);
+
+// A generated mesh through Gmsh (gmsh_io.cpp): build() adds the model (geometry and physical
+// groups) in a Gmsh session in a child process; then the size h (Delaunay in 2D, algorithm3d in 3D),
+// meshing in `dim`, extraction, the check that Gmsh honoured h, positive orientation and the element
+// checks. Gmsh's errors become InputError naming `who` ("could not <doing>").
+HostMesh generate_with_gmsh(const std::string& who, const std::string& doing, int dim, double h,
+                            int algorithm3d, const std::function<void()>& build);
 
 // Format a double compactly (like %g with 6 significant digits).
 std::string fmt(double v);
