@@ -38,6 +38,14 @@ double gauss(std::uint64_t seed, long q, int draw) {
   return std::sqrt(-2 * std::log(uniform(seed, q, draw))) * std::cos(2 * M_PI * uniform(seed, q, draw + 1));
 }
 
+// Weibull scale for mean 1: lambda = 1 / Gamma(1 + 1/m).
+double weibull_lambda(const StrengthScatter& s) { return 1.0 / std::tgamma(1.0 + 1.0 / s.modulus); }
+
+// Mean of 1 + cov z with z standard normal truncated to [a, b] (the bounds lower, upper of w).
+double truncated_mean(const StrengthScatter& s, double a, double b) {
+  return 1.0 + s.cov * (normal_pdf(a) - normal_pdf(b)) / (normal_cdf(b) - normal_cdf(a));
+}
+
 // The standard normal quantile: bisection on normal_cdf (host, set-up only).
 double normal_quantile(double u) {
   double lo = -40, hi = 40;
@@ -74,14 +82,14 @@ double CorrelatedField::gaussian(const double* x) const {
 
 double factor_from_gaussian(const StrengthScatter& s, double g) {
   if (s.distribution == "weibull") {
-    const double lambda = 1.0 / std::tgamma(1.0 + 1.0 / s.modulus);
+    const double lambda = weibull_lambda(s);
     const double tail = normal_cdf(-g);  // 1 - Phi(g), accurate far out in the upper tail
     return lambda * std::pow(-std::log(tail), 1.0 / s.modulus);
   }
   if (s.distribution == "normal") {
     const double a = (s.lower - 1.0) / s.cov, b = (s.upper - 1.0) / s.cov;
     const double Pa = normal_cdf(a), Pb = normal_cdf(b);
-    const double mean = 1.0 + s.cov * (normal_pdf(a) - normal_pdf(b)) / (Pb - Pa);
+    const double mean = truncated_mean(s, a, b);
     const double z = normal_quantile(Pa + normal_cdf(g) * (Pb - Pa));  // truncated normal at Phi(g)
     return (1.0 + s.cov * z) / mean;
   }
@@ -91,18 +99,16 @@ double factor_from_gaussian(const StrengthScatter& s, double g) {
 double strength_factor(const StrengthScatter& s, long q) {
   if (s.distribution == "weibull") {
     // w = lambda (-ln U)^(1/m) with lambda = 1 / Gamma(1 + 1/m): mean 1.
-    const double lambda = 1.0 / std::tgamma(1.0 + 1.0 / s.modulus);
+    const double lambda = weibull_lambda(s);
     return lambda * std::pow(-std::log(uniform(s.seed, q, 0)), 1.0 / s.modulus);
   }
   if (s.distribution == "normal") {
     // 1 + cov N(0,1) truncated to [lower, upper] (rejection, Box-Muller), divided by the mean of
     // the truncated distribution so that the mean stays 1.
     const double a = (s.lower - 1.0) / s.cov, b = (s.upper - 1.0) / s.cov;
-    const double mean = 1.0 + s.cov * (normal_pdf(a) - normal_pdf(b)) / (normal_cdf(b) - normal_cdf(a));
+    const double mean = truncated_mean(s, a, b);
     for (int draw = 0; draw < 2000; draw += 2) {
-      const double u1 = uniform(s.seed, q, draw), u2 = uniform(s.seed, q, draw + 1);
-      const double z = std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
-      const double w = 1.0 + s.cov * z;
+      const double w = 1.0 + s.cov * gauss(s.seed, q, draw);
       if (w >= s.lower && w <= s.upper) return w / mean;
     }
     return 1.0 / mean;  // not reached for any allowed bounds (probability below 1e-300)
