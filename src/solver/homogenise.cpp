@@ -14,6 +14,7 @@
 
 #include "common/error.hpp"
 #include "kernels/interface.hpp"
+#include "solver/elastic_host.hpp"
 #include "solver/interface_materials.hpp"
 
 namespace fdem {
@@ -46,33 +47,16 @@ double bulk_stiffness(const Case& c, const HostMesh& mesh, Triplets& t) {
     if (it == c.region_material.end())
       throw InputError(c.file + ": regions: an element's region has no material");
     const BulkMaterial& bm = c.materials[it->second];
-    const double mu = bm.E / (2 * (1 + bm.nu));
-    double lam = bm.E * bm.nu / ((1 + bm.nu) * (1 - 2 * bm.nu));
-    if (D == 2 && c.plane_stress) lam = 2 * lam * mu / (lam + 2 * mu);
+    const Lame L = lame(bm.E, bm.nu, D == 2 && c.plane_stress);
+    const double lam = L.lambda, mu = L.mu;
     const int* nd = &mesh.elems[static_cast<std::size_t>(e) * npe];
     // shape gradients: g[a][j] = dN_a / dX_j from the inverse of the edge matrix
     double A[D][D], inv[D][D], g[D + 1][D];
     for (int b = 0; b < D; ++b)
       for (int j = 0; j < D; ++j)
-        A[j][b] = mesh.X[static_cast<std::size_t>(nd[b + 1]) * D + j] -
-                  mesh.X[static_cast<std::size_t>(nd[0]) * D + j];
-    double det;
-    if constexpr (D == 2) {
-      det = A[0][0] * A[1][1] - A[0][1] * A[1][0];
-      inv[0][0] = A[1][1] / det;
-      inv[0][1] = -A[0][1] / det;
-      inv[1][0] = -A[1][0] / det;
-      inv[1][1] = A[0][0] / det;
-    } else {
-      det = A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-            A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-            A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-          const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
-          inv[i][j] = (A[i1][j1] * A[i2][j2] - A[i1][j2] * A[i2][j1]) / det;
-        }
-    }
+        A[j][b] = mesh.X[static_cast<std::size_t>(nd[b + 1]) * D + j] - mesh.X[static_cast<std::size_t>(nd[0]) * D + j];
+    const double d = det<D>(A);
+    inverse<D>(A, inv);
     // inv = A^-1: row b of inv holds dN_{b+1} / dX
     for (int j = 0; j < D; ++j) {
       g[0][j] = 0;
@@ -81,7 +65,7 @@ double bulk_stiffness(const Case& c, const HostMesh& mesh, Triplets& t) {
         g[0][j] -= inv[b][j];
       }
     }
-    const double vol = std::abs(det) / (D == 2 ? 2.0 : 6.0) * thick;
+    const double vol = std::abs(d) / (D == 2 ? 2.0 : 6.0) * thick;
     volume += vol;
     for (int a = 0; a < npe; ++a)
       for (int b = 0; b < npe; ++b)

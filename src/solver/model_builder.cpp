@@ -10,38 +10,13 @@
 #include "common/setup_times.hpp"
 #include "kernels/host_loops.hpp"
 #include "kernels/interface.hpp"
+#include "solver/elastic_host.hpp"
 #include "solver/interface_materials.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
 
 namespace {
-
-template <int D>
-double det(const double (&A)[D][D]) {
-  if constexpr (D == 2) {
-    return A[0][0] * A[1][1] - A[0][1] * A[1][0];
-  } else {
-    return A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-           A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-           A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
-  }
-}
-
-template <int D>
-void inverse(const double (&A)[D][D], double (&B)[D][D]) {
-  const double d = det<D>(A);
-  if constexpr (D == 2) {
-    B[0][0] = A[1][1] / d; B[0][1] = -A[0][1] / d;
-    B[1][0] = -A[1][0] / d; B[1][1] = A[0][0] / d;
-  } else {
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) {
-        const int i1 = (j + 1) % 3, i2 = (j + 2) % 3, j1 = (i + 1) % 3, j2 = (i + 2) % 3;
-        B[i][j] = (A[i1][j1] * A[i2][j2] - A[i1][j2] * A[i2][j1]) / d;
-      }
-  }
-}
 
 // Largest face measure of a simplex (2D: longest edge; 3D: largest face area).
 template <int D>
@@ -84,9 +59,8 @@ MaterialTable build_materials(const Case& c, const HostMesh& mesh, Model<D>& m) 
   t.rho.resize(nmat);
   for (int k = 0; k < nmat; ++k) {
     const auto& bm = c.materials[k];
-    double lam = bm.E * bm.nu / ((1 + bm.nu) * (1 - 2 * bm.nu));
-    const double mu = bm.E / (2 * (1 + bm.nu));
-    if (m.plane_stress) lam = 2 * lam * mu / (lam + 2 * mu);
+    const Lame L = lame(bm.E, bm.nu, m.plane_stress);
+    const double lam = L.lambda, mu = L.mu;
     mat_h(k, 0) = lam;
     mat_h(k, 1) = mu;
     mat_h(k, 2) = bm.density;
