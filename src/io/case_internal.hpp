@@ -15,6 +15,8 @@ namespace fdem::case_detail {
 // exist (load_case) or not (parse_case).
 void read_mesh(json& doc, Case& c, const Reader& R, const std::filesystem::path& base_dir,
                bool check_files);
+// "mesh": {"generator": "particles"} (src/io/case_particles.cpp), called by read_mesh.
+void read_particles_generator(json& m, MeshSpec& s, const Reader& R);
 void read_analysis(json& doc, Case& c, const Reader& R);
 void read_materials(json& doc, Case& c, const Reader& R);    // materials and regions
 void read_interfaces(json& doc, Case& c, const Reader& R);   // interface_materials and fracture

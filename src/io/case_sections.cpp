@@ -73,17 +73,21 @@ void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, con
 void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const std::string P = "mesh";
   MeshSpec& s = c.mesh;
-  const std::vector<std::string> gens = {"rectangle", "disc", "box", "sphere"};
+  const std::vector<std::string> gens = {"rectangle", "disc", "box", "sphere", "particles"};
   std::string g = R.string(m, P, "generator");
   if (std::find(gens.begin(), gens.end(), g) == gens.end())
     R.fail(child(P, "generator"), "unknown generator '" + g + "'" + did_you_mean(g, gens) +
-                                      " (allowed: rectangle, disc (2D); box, sphere (3D))");
+                                      " (allowed: rectangle, disc (2D); box, sphere, particles (3D))");
   const bool is2 = g == "rectangle" || g == "disc";
   if ((is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
                                       " mesh but dimension is " + std::to_string(c.dim) +
-                                      " (allowed: " + (c.dim == 2 ? "rectangle, disc" : "box, sphere") + ")");
+                                      " (allowed: " + (c.dim == 2 ? "rectangle, disc" : "box, sphere, particles") + ")");
   s.kind = g;
+  if (g == "particles") {  // many particles, each its own body (src/io/case_particles.cpp)
+    read_particles_generator(m, s, R);
+    return;
+  }
   const int d = c.dim;
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);

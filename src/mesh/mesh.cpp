@@ -13,6 +13,7 @@
 #include "common/error.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
+#include "mesh/particles.hpp"
 
 namespace fdem {
 
@@ -433,6 +434,10 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
       check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h), 3,
                            "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h);
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
+  }
+  if (spec.kind == "particles") {  // many particles, each its own body (particles.cpp)
+    need_dim(3);
+    return generate_particles(spec.particles, spec.element_size, spec.region);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +
                    "' (expected file, rectangle, disc, box or sphere)");

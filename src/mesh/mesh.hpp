@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "mesh/particle_spec.hpp"
+
 namespace fdem {
 
 struct HostMesh {
@@ -55,6 +57,7 @@ struct MeshSpec {
   std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
   std::string region = "body";            // generators: name of the single region
   std::string mesher = "delaunay";        // sphere: Gmsh's 3D algorithm, "delaunay" or "hxt"
+  ParticleSpec particles;                 // kind "particles" (src/mesh/particles.cpp)
 };
 
 // Readers and generators. All throw InputError with a message naming the file (or generator), the
