@@ -69,7 +69,7 @@ void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, con
   if (has_h) s.element_size = R.number(m, P, "element_size", gt(0));
 }
 
-// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere (3D).
+// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere, particles (3D).
 void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const std::string P = "mesh";
   MeshSpec& s = c.mesh;
@@ -82,7 +82,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   if ((is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
                                       " mesh but dimension is " + std::to_string(c.dim) +
-                                      " (allowed: " + (c.dim == 2 ? "rectangle, disc" : "box, sphere, particles") + ")");
+                                      " (allowed: " +
+                                      (c.dim == 2 ? "rectangle, disc" : "box, sphere, particles") + ")");
   s.kind = g;
   if (g == "particles") {  // many particles, each its own body (src/io/case_particles.cpp)
     read_particles_generator(m, s, R);

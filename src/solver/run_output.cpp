@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "common/error.hpp"
+#include "solver/fragment_bodies.hpp"
 #include "solver/interface_materials.hpp"
 
 namespace fdem {
@@ -83,7 +84,8 @@ std::vector<std::string> fragment_columns() {
 template <int D>
 RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out, const RunState* restart,
                               const std::string& file)
-    : analysis_(m) {
+    : analysis_(m), out_(out) {
+  bodies_ = initial_bodies<D>(m, body_);
   const std::vector<std::string> cols = fragment_columns();
   const std::string path = out + "/fragments.csv";
   if (!restart) {
@@ -135,7 +137,8 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
     top.push_back(fs.total_mass > 0 ? masses[i] / fs.total_mass : 0.0);
   std::vector<std::string> edges;
   for (int b = 0; b < kFragmentBins; ++b) edges.push_back(FragmentStats::bin_name(b));
-  return {{"count", fs.count},
+  nlohmann::json pb = per_body(sim);
+  nlohmann::json out = {{"count", fs.count},
           {"largest_fraction", fs.largest_fraction},
           {"largest_mass_kg", fs.largest_mass},
           {"total_mass_kg", fs.total_mass},
@@ -146,6 +149,20 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
             {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
             {"mass_fraction",
              std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}}};
+  if (!pb.is_null()) out["per_body"] = pb;
+  return out;
+}
+
+template <int D>
+nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
+  if (bodies_ < 2) return nullptr;
+  std::vector<int> frag;
+  element_ids(sim, frag);
+  std::vector<double> emass, centroid;
+  element_mass_centroids<D>(sim.m, emass, centroid);
+  const auto b = body_fragments(body_, bodies_, frag, analysis_.masses(), emass, centroid);
+  write_bodies_csv(out_ + "/bodies.csv", b, D);
+  return body_fragments_summary(b, out_ + "/bodies.csv");
 }
 
 // ---- RunSnapshots ----

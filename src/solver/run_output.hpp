@@ -59,6 +59,8 @@ class RunFragments {
                const std::string& file = "");
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
+  // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null).
+  nlohmann::json per_body(const Simulation<D>& sim);
   // The row of the instant `e` of the last history row (the present state).
   void write_row(const Simulation<D>& sim, const Energies& e);
   void element_ids(const Simulation<D>& sim, std::vector<int>& ids);
@@ -67,6 +69,9 @@ class RunFragments {
 
  private:
   FragmentAnalysis<D> analysis_;
+  std::string out_;
+  std::vector<int> body_;  // initial body of every element (fragment_bodies.hpp)
+  int bodies_ = 0;
   std::unique_ptr<HistoryWriter> csv_;
   std::vector<double> rows_;  // every row so far (row-major), for checkpoints
   long step_ = -1;  // the step the statistics are of
