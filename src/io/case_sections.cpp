@@ -81,8 +81,7 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const bool is2 = g == "rectangle" || g == "disc";
   if ((is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
-                                      " mesh but dimension is " + std::to_string(c.dim) +
-                                      " (allowed: " +
+                                      " mesh but dimension is " + std::to_string(c.dim) + " (allowed: " +
                                       (c.dim == 2 ? "rectangle, disc" : "box, sphere, particles") + ")");
   s.kind = g;
   if (g == "particles") {  // many particles, each its own body (src/io/case_particles.cpp)

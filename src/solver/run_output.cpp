@@ -138,17 +138,17 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
   std::vector<std::string> edges;
   for (int b = 0; b < kFragmentBins; ++b) edges.push_back(FragmentStats::bin_name(b));
   nlohmann::json pb = per_body(sim);
-  nlohmann::json out = {{"count", fs.count},
-          {"largest_fraction", fs.largest_fraction},
-          {"largest_mass_kg", fs.largest_mass},
-          {"total_mass_kg", fs.total_mass},
-          {"single_element_fragments", fs.single_element},
-          {"largest_fractions", top},
-          {"distribution",
-           {{"bin_lower_edge", edges},
-            {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
-            {"mass_fraction",
-             std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}}};
+  nlohmann::json out = {
+      {"count", fs.count},
+      {"largest_fraction", fs.largest_fraction},
+      {"largest_mass_kg", fs.largest_mass},
+      {"total_mass_kg", fs.total_mass},
+      {"single_element_fragments", fs.single_element},
+      {"largest_fractions", top},
+      {"distribution",
+       {{"bin_lower_edge", edges},
+        {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
+        {"mass_fraction", std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}}};
   if (!pb.is_null()) out["per_body"] = pb;
   return out;
 }
