@@ -34,7 +34,7 @@ void read_particles_generator(json& m, MeshSpec& s, const Reader& R) {
   const std::string P = "mesh";
   R.keys(m, P,
          {"generator", "count", "shape", "radius", "axis_ratio", "vertices", "box", "gap", "seed",
-          "element_size", "region", "threads"});
+          "element_size", "region", "threads", "batch", "mesher"});
   ParticleSpec& q = s.particles;
   q.count = static_cast<int>(R.integer(m, P, "count", 1, 100000));
   q.shape = R.string(m, P, "shape", std::string("sphere"));
@@ -62,6 +62,10 @@ void read_particles_generator(json& m, MeshSpec& s, const Reader& R) {
   q.gap = R.number(m, P, "gap", ge(0), 0.0);
   q.seed = static_cast<unsigned long>(R.integer(m, P, "seed", 0, 2147483647L, 1));
   q.threads = static_cast<int>(R.integer(m, P, "threads", 1, 64, 1));
+  q.batch = static_cast<int>(R.integer(m, P, "batch", 1, 100000, 50));
+  q.mesher = R.string(m, P, "mesher", std::string("delaunay"));
+  if (q.mesher != "delaunay" && q.mesher != "hxt")
+    R.fail(child(P, "mesher"), "unknown mesher '" + q.mesher + "' (allowed: delaunay, hxt)");
   // no larger than the smallest particle's radius (the generator also checks its half-width)
   s.element_size = R.number(m, P, "element_size", between(0, true, q.rmin, false));
   s.region = R.name(m, P, "region", std::string("particles"));

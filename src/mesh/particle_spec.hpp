@@ -14,6 +14,8 @@ struct ParticleSpec {
   std::array<double, 3> box_origin{0, 0, 0}, box_size{0, 0, 0};  // every particle lies inside
   double gap = 0;                                                // least clearance between two
   unsigned long seed = 1;
+  int batch = 50;                   // particles per Gmsh session (particles.cpp: cost linear in N)
+  std::string mesher = "delaunay";  // Gmsh's 3D algorithm: "delaunay" (1) or "hxt" (10)
   int threads = 1;  // Gmsh's threads (General.NumThreads; the mesh depends on it: see particles.cpp)
 };
 

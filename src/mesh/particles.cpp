@@ -289,6 +289,31 @@ double half_width(const Particle& p, const std::string& shape) {
   return w;
 }
 
+// `b` appended to `a` as separate bodies: node ids shifted, regions, node and face sets joined by name.
+void append_mesh(HostMesh& a, const HostMesh& b) {
+  if (a.X.empty()) {
+    a = b;
+    return;
+  }
+  const int off = a.num_nodes();
+  a.X.insert(a.X.end(), b.X.begin(), b.X.end());
+  for (int v : b.elems) a.elems.push_back(v + off);
+  for (int r : b.elem_region) {
+    int ra = a.region_index(b.region_names[r]);
+    if (ra < 0) {
+      ra = static_cast<int>(a.region_names.size());
+      a.region_names.push_back(b.region_names[r]);
+    }
+    a.elem_region.push_back(ra);
+  }
+  for (const auto& [name, set] : b.node_sets)
+    for (int v : set) a.node_sets[name].push_back(v + off);
+  for (const auto& [name, set] : b.face_sets)
+    for (int v : set) a.face_sets[name].push_back(v + off);
+  for (int v : b.node_origin) a.node_origin.push_back(v + off);
+  a.warnings.insert(a.warnings.end(), b.warnings.begin(), b.warnings.end());
+}
+
 }  // namespace
 
 HostMesh generate_particles(const ParticleSpec& s, double h, const std::string& region) {
@@ -310,29 +335,39 @@ HostMesh generate_particles(const ParticleSpec& s, double h, const std::string& 
   check_fits_in_memory(estimate_gmsh_elements(3, vsolid, h), 3,
                        "mesh.element_size = " + fmt(h) + " m (" + std::to_string(s.count) + " particles)", h);
   const std::string rname = region.empty() ? std::string("particles") : region;
-  return mesh_detail::generate_with_gmsh(who, "mesh the particles", 3, h, 1, [&] {
-    gmsh::model::add("particles");
-    if (s.threads > 1) {  // surfaces and volumes meshed in parallel (Gmsh's OpenMP)
-      gmsh::option::setNumber("General.NumThreads", s.threads);
-      gmsh::option::setNumber("Mesh.MaxNumThreads2D", s.threads);
-      gmsh::option::setNumber("Mesh.MaxNumThreads3D", s.threads);
-    }
-    std::vector<int> vols;
-    vols.reserve(pl.particles.size());
-    for (const Particle& p : pl.particles) vols.push_back(add_particle(p, s.shape));
-    gmsh::model::occ::synchronize();
-    gmsh::vectorpair vt, bnd;
-    for (int v : vols) vt.push_back({3, v});
-    gmsh::model::getBoundary(vt, bnd, false, false, false);
-    std::vector<int> surfs;
-    for (const auto& [d, t] : bnd) surfs.push_back(std::abs(t));
-    std::sort(surfs.begin(), surfs.end());
-    surfs.erase(std::unique(surfs.begin(), surfs.end()), surfs.end());
-    const int pv = gmsh::model::addPhysicalGroup(3, vols);
-    gmsh::model::setPhysicalName(3, pv, rname);
-    const int ps = gmsh::model::addPhysicalGroup(2, surfs);
-    gmsh::model::setPhysicalName(2, ps, "surface");
-  });
+  // Batches of s.batch particles, one Gmsh session each: Gmsh's 3D meshing of one volume takes
+  // time in proportion to the whole model, so one session for all N particles costs O(N^2)
+  // (1000 spheres: ~0.7 s per volume against ~0.05 s with 100); batches keep it linear.
+  HostMesh all;
+  const int n = static_cast<int>(pl.particles.size()), batch = std::max(1, s.batch);
+  for (int first = 0; first < n; first += batch) {
+    const int last = std::min(n, first + batch);
+    HostMesh part =
+        mesh_detail::generate_with_gmsh(who, "mesh the particles", 3, h, s.mesher == "hxt" ? 10 : 1, [&] {
+          gmsh::model::add("particles");
+          if (s.threads > 1) {  // surfaces and volumes meshed in parallel (Gmsh's OpenMP)
+            gmsh::option::setNumber("General.NumThreads", s.threads);
+            gmsh::option::setNumber("Mesh.MaxNumThreads2D", s.threads);
+            gmsh::option::setNumber("Mesh.MaxNumThreads3D", s.threads);
+          }
+          std::vector<int> vols;
+          for (int i = first; i < last; ++i) vols.push_back(add_particle(pl.particles[i], s.shape));
+          gmsh::model::occ::synchronize();
+          gmsh::vectorpair vt, bnd;
+          for (int v : vols) vt.push_back({3, v});
+          gmsh::model::getBoundary(vt, bnd, false, false, false);
+          std::vector<int> surfs;
+          for (const auto& [d, t] : bnd) surfs.push_back(std::abs(t));
+          std::sort(surfs.begin(), surfs.end());
+          surfs.erase(std::unique(surfs.begin(), surfs.end()), surfs.end());
+          const int pv = gmsh::model::addPhysicalGroup(3, vols);
+          gmsh::model::setPhysicalName(3, pv, rname);
+          const int ps = gmsh::model::addPhysicalGroup(2, surfs);
+          gmsh::model::setPhysicalName(2, ps, "surface");
+        });
+    append_mesh(all, part);
+  }
+  return all;
 }
 
 }  // namespace fdem
