@@ -127,15 +127,16 @@ TEST(Particles, SphereHull) {
   EXPECT_FALSE(fdem::sphere_hull(cube, tris));
 }
 
-// Meshed: one body per particle, no node of one particle within the gap of another's, each
-// particle's volume that of its equivalent sphere (polyhedra: exact; spheres: the inscribed facets
-// lose less than 0.4 (h/r)^2, ellipsoids less than 15 % at h = 0.3 to 0.6 r), and the same mesh
-// from the same seed.
+// Meshed in two batches: one body per particle, no node of one particle within the gap of
+// another's, each particle's volume that of its equivalent sphere (polyhedra: exact; spheres: the
+// inscribed facets lose less than 0.4 (h/r)^2, ellipsoids less than 15 % at h = 0.3 to 0.6 r),
+// and the same mesh from the same seed.
 TEST(Particles, MeshOneBodyPerParticle) {
   for (const std::string shape : {"sphere", "ellipsoid", "polyhedron"}) {
     ParticleSpec s = spheres(6);
     s.shape = shape;
     s.box_size = {0.05, 0.05, 0.04};
+    s.batch = 4;  // two Gmsh sessions, their meshes appended
     const double h = 0.0025;
     const HostMesh m = fdem::generate_particles(s, h, "particles");
     std::vector<int> body;
@@ -164,6 +165,9 @@ TEST(Particles, MeshOneBodyPerParticle) {
     for (int e = 0; e < m.num_elems(); ++e)
       for (int a = 0; a < 4; ++a) nbody[m.elems[4 * e + a]] = body[e];
     const auto& surf = m.node_sets.at("surface");
+    std::vector<int> on_surface(6, 0);
+    for (int p : surf) on_surface[nbody[p]] = 1;
+    EXPECT_EQ(std::count(on_surface.begin(), on_surface.end(), 1), 6) << shape;  // both sessions' sets
     double dmin = 1;
     for (std::size_t i = 0; i < surf.size(); ++i)
       for (std::size_t j = i + 1; j < surf.size(); ++j) {
