@@ -91,7 +91,7 @@ const std::vector<std::string>& output_file_names() {
       "case.json",     "case.json.tmp",        "summary.json",   "summary.json.tmp",
       "history.csv",   "history.csv.tmp",      "fragments.csv",  "fragments.csv.tmp",
       "snapshots.h5",  "snapshots.h5.damaged", "snapshots.xdmf", "snapshots.xdmf.tmp",
-      "checkpoint.h5", "checkpoint.h5.tmp"};
+      "checkpoint.h5", "checkpoint.h5.tmp",    "bodies.csv",     "bodies.csv.tmp"};
   return names;
 }
 

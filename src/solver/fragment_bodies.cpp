@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "common/error.hpp"
+#include "io/output.hpp"
 #include "mesh/mesh_internal.hpp"
 
 namespace fdem {
@@ -73,17 +74,20 @@ std::vector<BodyFragments> body_fragments(const std::vector<int>& body, int nbod
 }
 
 void write_bodies_csv(const std::string& path, const std::vector<BodyFragments>& b, int dim) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw InputError("cannot write '" + path + "'");
-  std::fprintf(f, "body,elements,mass [kg],fragments,largest_fraction,x [m],y [m]%s\n",
-               dim == 3 ? ",z [m]" : "");
+  std::string text = std::string("body,elements,mass [kg],fragments,largest_fraction,x [m],y [m]") +
+                     (dim == 3 ? ",z [m]" : "") + "\n";
+  char line[256];
   for (std::size_t i = 0; i < b.size(); ++i) {
-    std::fprintf(f, "%zu,%d,%.9g,%d,%.9g,%.9g,%.9g", i, b[i].elements, b[i].mass, b[i].fragments,
-                 b[i].largest_fraction, b[i].centroid[0], b[i].centroid[1]);
-    if (dim == 3) std::fprintf(f, ",%.9g", b[i].centroid[2]);
-    std::fprintf(f, "\n");
+    std::snprintf(line, sizeof line, "%zu,%d,%.9g,%d,%.9g,%.9g,%.9g", i, b[i].elements, b[i].mass,
+                  b[i].fragments, b[i].largest_fraction, b[i].centroid[0], b[i].centroid[1]);
+    text += line;
+    if (dim == 3) {
+      std::snprintf(line, sizeof line, ",%.9g", b[i].centroid[2]);
+      text += line;
+    }
+    text += "\n";
   }
-  if (std::fclose(f) != 0) throw InputError("cannot write '" + path + "'");
+  write_file_atomic(path, text);
 }
 
 nlohmann::json body_fragments_summary(const std::vector<BodyFragments>& b, const std::string& file) {
