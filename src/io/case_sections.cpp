@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/case_internal.hpp"
+#include "io/case_text.hpp"
 
 namespace fdem::case_detail {
 namespace {
@@ -69,24 +70,67 @@ void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, con
   if (has_h) s.element_size = R.number(m, P, "element_size", gt(0));
 }
 
-// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere (3D).
+// "mesh": {"generator": "grains", ...}: a Voronoi grain specimen (disc or rectangle).
+void read_grains_generator(json& m, MeshSpec& s, const Reader& R) {
+  const std::string P = "mesh";
+  R.keys(m, P,
+         {"generator", "shape", "center", "radius", "origin", "size", "grain_size", "element_size", "seed",
+          "minerals", "region"});
+  s.shape = R.string(m, P, "shape");
+  if (s.shape == "disc") {
+    for (const char* k : {"origin", "size"})
+      if (m.contains(k))
+        R.fail(child(P, k), "applies to shape 'rectangle' only (a disc takes center, radius)");
+    s.origin = R.vec(m, P, "center", 2, Vec3{0, 0, 0});
+    s.radius = R.number(m, P, "radius", gt(0));
+  } else if (s.shape == "rectangle") {
+    for (const char* k : {"center", "radius"})
+      if (m.contains(k)) R.fail(child(P, k), "applies to shape 'disc' only (a rectangle takes origin, size)");
+    s.origin = R.vec(m, P, "origin", 2, Vec3{0, 0, 0});
+    s.size = R.vec(m, P, "size", 2, std::nullopt, gt(0));
+  } else {
+    R.fail(child(P, "shape"), "unknown shape '" + s.shape + "' (allowed: disc, rectangle)");
+  }
+  s.element_size = R.number(m, P, "element_size", gt(0));
+  s.grain_size = R.number(m, P, "grain_size", ge(2 * s.element_size));
+  s.seed = static_cast<unsigned long>(R.integer(m, P, "seed", 0, 4294967295L, 1));
+  if (m.contains("minerals")) {
+    json& mj = R.object(m, P, "minerals", true);
+    const std::string mp = child(P, "minerals");
+    if (mj.empty()) R.fail(mp, "give at least one mineral: {\"<region>\": <area fraction>, ...}");
+    double sum = 0;
+    for (auto& [name, v] : mj.items()) {
+      if (!valid_name(name))
+        R.fail(mp, "'" + name + "' is not a valid region name (allowed: letters, digits, '_', '-', '.')");
+      const double f = R.number_value(v, child(mp, name), between(0, true, 1, false));
+      s.minerals.push_back({name, f});
+      sum += f;
+    }
+    if (std::abs(sum - 1) > 1e-6)
+      R.fail(mp, "the area fractions add up to " + std::to_string(sum) + " (allowed: 1 within 1e-6)");
+  }
+}
+
+// "mesh": {"generator": ...}: rectangle, disc, grains (2D), box, sphere (3D).
 void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const std::string P = "mesh";
   MeshSpec& s = c.mesh;
-  const std::vector<std::string> gens = {"rectangle", "disc", "box", "sphere"};
+  const std::vector<std::string> gens = {"rectangle", "disc", "grains", "box", "sphere"};
   std::string g = R.string(m, P, "generator");
   if (std::find(gens.begin(), gens.end(), g) == gens.end())
     R.fail(child(P, "generator"), "unknown generator '" + g + "'" + did_you_mean(g, gens) +
-                                      " (allowed: rectangle, disc (2D); box, sphere (3D))");
-  const bool is2 = g == "rectangle" || g == "disc";
+                                      " (allowed: rectangle, disc, grains (2D); box, sphere (3D))");
+  const bool is2 = g == "rectangle" || g == "disc" || g == "grains";
   if ((is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
-                                      " mesh but dimension is " + std::to_string(c.dim) +
-                                      " (allowed: " + (c.dim == 2 ? "rectangle, disc" : "box, sphere") + ")");
+                                      " mesh but dimension is " + std::to_string(c.dim) + " (allowed: " +
+                                      (c.dim == 2 ? "rectangle, disc, grains" : "box, sphere") + ")");
   s.kind = g;
   const int d = c.dim;
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);
+  } else if (g == "grains") {
+    read_grains_generator(m, s, R);
   } else {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});

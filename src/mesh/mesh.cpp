@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "common/error.hpp"
+#include "mesh/grains.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
 
@@ -434,8 +435,17 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
                            "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h);
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
   }
+  if (spec.kind == "grains") {
+    need_dim(2);
+    const double pi = std::acos(-1.0), h = spec.element_size;
+    const double area = spec.shape == "disc" ? pi * spec.radius * spec.radius : spec.size[0] * spec.size[1];
+    if (h > 0 && area > 0)
+      check_fits_in_memory(estimate_gmsh_elements(2, area, h), 2,
+                           "mesh.element_size = " + fmt(h) + " m (grains)", h);
+    return generate_grains(spec);
+  }
   throw InputError("mesh: unknown kind '" + spec.kind +
-                   "' (expected file, rectangle, disc, box or sphere)");
+                   "' (expected file, rectangle, disc, box, sphere or grains)");
 }
 
 }  // namespace fdem

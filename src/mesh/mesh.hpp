@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fdem {
@@ -43,7 +44,7 @@ struct HostMesh {
 
 // What a case file's "mesh" object asks for (see docs/case-format.md).
 struct MeshSpec {
-  std::string kind;         // "file", "rectangle", "disc", "box", "sphere"
+  std::string kind;         // "file", "rectangle", "disc", "box", "sphere", "grains"
   std::string file;         // kind == "file": path, already resolved against the case file's folder
   double element_size = 0;  // generators (disc, sphere; rectangle/box derive nx,ny,nz if not given);
                             // .geo files: upper bound on the element size (0: the file's own)
@@ -55,6 +56,13 @@ struct MeshSpec {
   std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
   std::string region = "body";            // generators: name of the single region
   std::string mesher = "delaunay";        // sphere: Gmsh's 3D algorithm, "delaunay" or "hxt"
+  // grains (src/mesh/grains.hpp): the specimen's shape ("disc": origin, radius; "rectangle":
+  // origin, size), the mean grain diameter, the seed of the tessellation, and the minerals (region
+  // names) with their area fractions.
+  std::string shape;
+  double grain_size = 0;
+  unsigned long seed = 1;
+  std::vector<std::pair<std::string, double>> minerals;
 };
 
 // Readers and generators. All throw InputError with a message naming the file (or generator), the
