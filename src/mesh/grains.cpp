@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "mesh/grains_internal.hpp"
 #include "mesh/mesh_internal.hpp"
 
 namespace fdem {
@@ -24,22 +25,6 @@ namespace {
 
 using P2 = std::array<double, 2>;
 constexpr double kPi = 3.14159265358979323846;
-
-// splitmix64: the same numbers on every platform and standard library.
-class Stream {
- public:
-  explicit Stream(std::uint64_t seed) : s_(seed * 0x2545f4914f6cdd1dULL + 0x632be59bd9b4e019ULL) {}
-  double uniform() {  // in [0, 1)
-    std::uint64_t z = (s_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return static_cast<double>(z >> 11) * 0x1.0p-53;
-  }
-
- private:
-  std::uint64_t s_;
-};
 
 struct Domain {
   bool disc = false;
@@ -67,38 +52,6 @@ std::vector<P2> clip(const std::vector<P2>& poly, const P2& n, double c) {
     }
   }
   return out;
-}
-
-std::vector<P2> draw_seeds(const Domain& dom, double d, std::uint64_t seed, const std::string& who) {
-  const double n_target = dom.area() / (0.25 * kPi * d * d);
-  if (n_target < 1.5)
-    throw InputError(who + ": the specimen holds " + fmt(n_target) + " grains of grain_size " + fmt(d) +
-                     " m; give a grain_size below " + fmt(std::sqrt(dom.area() / (0.5 * kPi))) +
-                     " m (at least 2 grains)");
-  if (n_target > 20000)
-    throw InputError(who + ": the specimen would hold " + fmt(n_target) + " grains (limit 20000); give a " +
-                     "grain_size of at least " + fmt(std::sqrt(dom.area() / (0.25 * kPi * 20000))) + " m");
-  const int n = static_cast<int>(std::lround(n_target));
-  const double rmin2 = 0.25 * d * d;  // seeds at least half a grain size apart
-  Stream rng(seed);
-  std::vector<P2> s;
-  long tries = 0;
-  const long max_tries = 2000L * n;
-  while (static_cast<int>(s.size()) < n) {
-    if (++tries > max_tries)
-      throw InputError(who + ": could place only " + std::to_string(s.size()) + " of " + std::to_string(n) +
-                       " grain seeds half a grain size apart; give another seed");
-    const P2 p{dom.x0 + rng.uniform() * (dom.x1 - dom.x0), dom.y0 + rng.uniform() * (dom.y1 - dom.y0)};
-    if (!dom.inside(p)) continue;
-    bool ok = true;
-    for (const P2& q : s)
-      if ((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) < rmin2) {
-        ok = false;
-        break;
-      }
-    if (ok) s.push_back(p);
-  }
-  return s;
 }
 
 // Voronoi cell of seeds[i] in the box of dom, counter-clockwise.
@@ -335,7 +288,12 @@ GrainTessellation tessellate_grains(const MeshSpec& s) {
                      " m: a grain needs a few elements across (give grain_size >= " + fmt(2 * h) + ")");
   const Domain dom = domain_of(s);
   GrainTessellation g;
-  g.seeds = draw_seeds(dom, d, s.seed, who);
+  {
+    const double lo[3] = {dom.x0, dom.y0, 0}, hi[3] = {dom.x1, dom.y1, 0};
+    for (const auto& p : grain_detail::draw_seeds(2, lo, hi, dom.area(), d, s.seed, who,
+                                                  [&](const std::array<double, 3>& x) { return dom.inside({x[0], x[1]}); }))
+      g.seeds.push_back({p[0], p[1]});
+  }
   std::vector<std::vector<P2>> cells;
   for (int i = 0; i < static_cast<int>(g.seeds.size()); ++i) cells.push_back(voronoi_cell(g.seeds, i, dom));
   g.loops = merge_vertices(cells, std::min(h / 3, 0.15 * d), dom, g.vertices);
@@ -364,32 +322,7 @@ GrainTessellation tessellate_grains(const MeshSpec& s) {
     }
     g.area[c] = a;
   }
-  // Minerals by area fraction: grains in a random order, each to the mineral furthest below its share.
-  std::vector<std::pair<std::string, double>> mins = s.minerals;
-  if (mins.empty()) mins.push_back({s.region.empty() ? std::string("body") : s.region, 1.0});
-  double total = 0;
-  for (double a : g.area) total += a;
-  for (const auto& m : mins) g.minerals.push_back(m.first);
-  g.mineral_area.assign(mins.size(), 0.0);
-  g.mineral.assign(ng, 0);
-  std::vector<int> order(ng);
-  std::iota(order.begin(), order.end(), 0);
-  Stream rng(s.seed ^ 0x5bd1e995ULL);
-  for (size_t i = ng; i > 1; --i)
-    std::swap(order[i - 1], order[static_cast<size_t>(rng.uniform() * static_cast<double>(i))]);
-  for (int c : order) {
-    size_t best = 0;
-    double deficit = -1e300;
-    for (size_t m = 0; m < mins.size(); ++m) {
-      const double df = mins[m].second * total - g.mineral_area[m];
-      if (df > deficit + 1e-15 * total) {
-        deficit = df;
-        best = m;
-      }
-    }
-    g.mineral[c] = static_cast<int>(best);
-    g.mineral_area[best] += g.area[c];
-  }
+  grain_detail::assign_minerals(g.area, s, g.mineral, g.minerals, g.mineral_area);
   return g;
 }
 
