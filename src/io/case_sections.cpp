@@ -70,30 +70,38 @@ void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, con
   if (has_h) s.element_size = R.number(m, P, "element_size", gt(0));
 }
 
-// "mesh": {"generator": "grains", ...}: a Voronoi grain specimen (disc or rectangle).
-void read_grains_generator(json& m, MeshSpec& s, const Reader& R) {
+// "mesh": {"generator": "grains", ...}: a Voronoi grain specimen (disc or rectangle; box in 3D).
+void read_grains_generator(json& m, MeshSpec& s, int d, const Reader& R) {
   const std::string P = "mesh";
   R.keys(m, P,
          {"generator", "shape", "center", "radius", "origin", "size", "grain_size", "element_size", "seed",
-          "minerals", "region"});
+          "minerals", "region", "mesher"});
   s.shape = R.string(m, P, "shape");
+  if (d == 3 && s.shape != "box") R.fail(child(P, "shape"), "unknown 3D shape '" + s.shape + "' (allowed: box)");
+  if (d == 2 && s.shape == "box") R.fail(child(P, "shape"), "'box' is a 3D shape (allowed in 2D: disc, rectangle)");
   if (s.shape == "disc") {
     for (const char* k : {"origin", "size"})
       if (m.contains(k))
         R.fail(child(P, k), "applies to shape 'rectangle' only (a disc takes center, radius)");
     s.origin = R.vec(m, P, "center", 2, Vec3{0, 0, 0});
     s.radius = R.number(m, P, "radius", gt(0));
-  } else if (s.shape == "rectangle") {
+  } else if (s.shape == "rectangle" || s.shape == "box") {
     for (const char* k : {"center", "radius"})
-      if (m.contains(k)) R.fail(child(P, k), "applies to shape 'disc' only (a rectangle takes origin, size)");
-    s.origin = R.vec(m, P, "origin", 2, Vec3{0, 0, 0});
-    s.size = R.vec(m, P, "size", 2, std::nullopt, gt(0));
+      if (m.contains(k)) R.fail(child(P, k), "applies to shape 'disc' only (a " + s.shape + " takes origin, size)");
+    s.origin = R.vec(m, P, "origin", d, Vec3{0, 0, 0});
+    s.size = R.vec(m, P, "size", d, std::nullopt, gt(0));
   } else {
     R.fail(child(P, "shape"), "unknown shape '" + s.shape + "' (allowed: disc, rectangle)");
   }
   s.element_size = R.number(m, P, "element_size", gt(0));
   s.grain_size = R.number(m, P, "grain_size", ge(2 * s.element_size));
   s.seed = static_cast<unsigned long>(R.integer(m, P, "seed", 0, 4294967295L, 1));
+  if (m.contains("mesher")) {  // 3D only, not written when absent
+    if (d != 3) R.fail(child(P, "mesher"), "applies to 3D grains only (2D grains are meshed by Gmsh's Delaunay)");
+    s.mesher = R.string(m, P, "mesher");
+    if (s.mesher != "delaunay" && s.mesher != "hxt")
+      R.fail(child(P, "mesher"), "unknown mesher '" + s.mesher + "' (allowed: delaunay, hxt)");
+  }
   if (m.contains("minerals")) {
     json& mj = R.object(m, P, "minerals", true);
     const std::string mp = child(P, "minerals");
@@ -111,7 +119,7 @@ void read_grains_generator(json& m, MeshSpec& s, const Reader& R) {
   }
 }
 
-// "mesh": {"generator": ...}: rectangle, disc, grains (2D), box, sphere (3D).
+// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere (3D), grains (both).
 void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const std::string P = "mesh";
   MeshSpec& s = c.mesh;
@@ -119,18 +127,18 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   std::string g = R.string(m, P, "generator");
   if (std::find(gens.begin(), gens.end(), g) == gens.end())
     R.fail(child(P, "generator"), "unknown generator '" + g + "'" + did_you_mean(g, gens) +
-                                      " (allowed: rectangle, disc, grains (2D); box, sphere (3D))");
-  const bool is2 = g == "rectangle" || g == "disc" || g == "grains";
-  if ((is2 ? 2 : 3) != c.dim)
+                                      " (allowed: rectangle, disc (2D); box, sphere (3D); grains)");
+  const bool is2 = g == "rectangle" || g == "disc";
+  if (g != "grains" && (is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
                                       " mesh but dimension is " + std::to_string(c.dim) + " (allowed: " +
-                                      (c.dim == 2 ? "rectangle, disc, grains" : "box, sphere") + ")");
+                                      (c.dim == 2 ? "rectangle, disc, grains" : "box, sphere, grains") + ")");
   s.kind = g;
   const int d = c.dim;
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);
   } else if (g == "grains") {
-    read_grains_generator(m, s, R);
+    read_grains_generator(m, s, d, R);
   } else {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});

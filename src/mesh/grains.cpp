@@ -290,8 +290,10 @@ GrainTessellation tessellate_grains(const MeshSpec& s) {
   GrainTessellation g;
   {
     const double lo[3] = {dom.x0, dom.y0, 0}, hi[3] = {dom.x1, dom.y1, 0};
-    for (const auto& p : grain_detail::draw_seeds(2, lo, hi, dom.area(), d, s.seed, who,
-                                                  [&](const std::array<double, 3>& x) { return dom.inside({x[0], x[1]}); }))
+    for (const auto& p :
+         grain_detail::draw_seeds(2, lo, hi, dom.area(), d, s.seed, who, [&](const std::array<double, 3>& x) {
+           return dom.inside({x[0], x[1]});
+         }))
       g.seeds.push_back({p[0], p[1]});
   }
   std::vector<std::vector<P2>> cells;

@@ -37,9 +37,30 @@ struct GrainTessellation {
 // than 2 or more than 20000 grains.
 GrainTessellation tessellate_grains(const MeshSpec& spec);
 
+// The 3D tessellation of a box (spec.shape "box": origin, size): convex polyhedral grains. Each face
+// is stored once (faces[f], a loop of vertex ids; face_side[f] = -1 between two grains, 0..5 on the
+// box's side xmin, xmax, ymin, ymax, zmin, zmax); cells[g] lists grain g's faces. Seeds, merging
+// (vertices closer than a third of the element size, at most 0.15 grain sizes) and minerals (by
+// volume fraction) as in 2D; a face whose vertices no longer lie in one plane after merging is
+// meshed as a fan of triangles around its centre.
+struct GrainTessellation3 {
+  std::vector<std::array<double, 3>> vertices;
+  std::vector<std::vector<int>> faces;
+  std::vector<int> face_side;
+  std::vector<std::vector<int>> cells;
+  std::vector<double> volume;                // per grain, m^3
+  std::vector<std::array<double, 3>> seeds;  // per grain
+  std::vector<int> mineral;                  // per grain: index into minerals
+  std::vector<std::string> minerals;
+  std::vector<double> mineral_volume;
+};
+GrainTessellation3 tessellate_grains_3d(const MeshSpec& spec);
+
 // The tessellation meshed with triangles of size spec.element_size (Gmsh). Regions: the minerals;
 // face (and node) sets "grain_boundaries" (curves between two grains) and "boundary" (the outer
 // curves), for a rectangle also "left", "right", "bottom", "top"; node set "all".
 HostMesh generate_grains(const MeshSpec& spec);
+// The same in 3D (tetrahedra; face sets "grain_boundaries", "boundary", "xmin" ... "zmax").
+HostMesh generate_grains_3d(const MeshSpec& spec);
 
 }  // namespace fdem

@@ -10,16 +10,17 @@ namespace fdem::grain_detail {
 
 using mesh_detail::fmt;
 
-std::vector<std::array<double, 3>> draw_seeds(int dim, const double lo[3], const double hi[3], double measure,
-                                              double d, std::uint64_t seed, const std::string& who,
-                                              const std::function<bool(const std::array<double, 3>&)>& inside) {
+std::vector<std::array<double, 3>> draw_seeds(
+    int dim, const double lo[3], const double hi[3], double measure, double d, std::uint64_t seed,
+    const std::string& who, const std::function<bool(const std::array<double, 3>&)>& inside) {
   const double pi = 3.14159265358979323846;
   const double one = dim == 2 ? 0.25 * pi * d * d : pi * d * d * d / 6;  // a circle's area, a sphere's volume
   const double n_target = measure / one;
   const double root = dim == 2 ? 0.5 : 1.0 / 3.0;
   if (n_target < 1.5)
     throw InputError(who + ": the specimen holds " + fmt(n_target) + " grains of grain_size " + fmt(d) +
-                     " m; give a grain_size below " + fmt(d * std::pow(n_target / 2, root)) + " m (at least 2 grains)");
+                     " m; give a grain_size below " + fmt(d * std::pow(n_target / 2, root)) +
+                     " m (at least 2 grains)");
   if (n_target > 20000)
     throw InputError(who + ": the specimen would hold " + fmt(n_target) + " grains (limit 20000); give a " +
                      "grain_size of at least " + fmt(d * std::pow(n_target / 20000, root)) + " m");

@@ -30,9 +30,9 @@ class Stream {
 // a grain size d apart, as many as `measure` (area or volume) over a circle's (sphere's) of
 // diameter d. Throws InputError naming `who` for fewer than 2 or more than 20000 grains, or when
 // dart throwing cannot place them.
-std::vector<std::array<double, 3>> draw_seeds(int dim, const double lo[3], const double hi[3], double measure,
-                                              double d, std::uint64_t seed, const std::string& who,
-                                              const std::function<bool(const std::array<double, 3>&)>& inside);
+std::vector<std::array<double, 3>> draw_seeds(
+    int dim, const double lo[3], const double hi[3], double measure, double d, std::uint64_t seed,
+    const std::string& who, const std::function<bool(const std::array<double, 3>&)>& inside);
 
 // Minerals by area (volume) fraction: grains in a random order (from spec.seed), each to the
 // mineral furthest below its share. No minerals in spec: one, named spec.region.

@@ -436,13 +436,14 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
   }
   if (spec.kind == "grains") {
-    need_dim(2);
     const double pi = std::acos(-1.0), h = spec.element_size;
-    const double area = spec.shape == "disc" ? pi * spec.radius * spec.radius : spec.size[0] * spec.size[1];
-    if (h > 0 && area > 0)
-      check_fits_in_memory(estimate_gmsh_elements(2, area, h), 2,
+    const double measure = dim == 3               ? spec.size[0] * spec.size[1] * spec.size[2]
+                           : spec.shape == "disc" ? pi * spec.radius * spec.radius
+                                                  : spec.size[0] * spec.size[1];
+    if (h > 0 && measure > 0)
+      check_fits_in_memory(estimate_gmsh_elements(dim, measure, h), dim,
                            "mesh.element_size = " + fmt(h) + " m (grains)", h);
-    return generate_grains(spec);
+    return dim == 3 ? generate_grains_3d(spec) : generate_grains(spec);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +
                    "' (expected file, rectangle, disc, box, sphere or grains)");

@@ -85,7 +85,7 @@ HostMesh generate_box(const std::array<double, 3>& origin, const std::array<doub
                       int nx, int ny, int nz, const std::string& region = "body");
 // Sphere of radius R, unstructured tetrahedra of size h (Gmsh). Node sets: "surface", "all".
 // mesher "delaunay" (Gmsh's Algorithm3D 1) or "hxt" (10: about 8 times faster at 1e6
-// tetrahedra, another mesh; one thread, so that the mesh does not depend on the machine).
+// tetrahedra, another mesh; one thread; not reproducible between invocations: docs/case-format.md).
 HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
                          const std::string& region = "body", const std::string& mesher = "delaunay");
 // Two meshes side by side as one (separate bodies): b's node ids, elements, regions and interfaces
