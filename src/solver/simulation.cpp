@@ -122,6 +122,7 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
     for (int k = 0; k < 3; ++k) e.momentum[k] = w.momentum[k];
     e.damping = work_damping_ + 0.5 * w.damping;
     e.work_external = wp + work_bc_ + 0.5 * w.bc_work + w.gravity_work + w.load_work;
+    if (prm_.load_ramps > 0) e.work_external += work_ramp_ + 0.5 * w.ramp_work;
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
                        e.fracture + e.damping + e.friction;
     if (!have_reference_) {
@@ -135,6 +136,7 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
   }
   work_damping_ += w.damping;
   work_bc_ += w.bc_work;
+  work_ramp_ += w.ramp_work;
   push_works();
 }
 
@@ -144,6 +146,7 @@ void Simulation<D>::pull_works() const {
   Kokkos::deep_copy(h, work_dev_);
   work_damping_ = h(0);
   work_bc_ = h(1);
+  work_ramp_ = h(2);
 }
 
 template <int D>
@@ -151,6 +154,7 @@ void Simulation<D>::push_works() {
   auto h = Kokkos::create_mirror_view(work_dev_);
   h(0) = work_damping_;
   h(1) = work_bc_;
+  h(2) = work_ramp_;
   Kokkos::deep_copy(work_dev_, h);
 }
 
@@ -358,6 +362,8 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
   f.integer("simulation/step", step_count);
   f.real("simulation/work_damping", work_damping_);
   f.real("simulation/work_bc", work_bc_);
+  if (prm_.load_ramps > 0)  // ramped point loads (optional: checkpoints from before had none)
+    f.real("simulation/work_ramped_loads", work_ramp_, /*optional=*/true);
   f.real("simulation/energy_reference", reference_);
   f.integer("simulation/have_reference", have_reference_);
   f.values("simulation/energies", kEnergyFieldCount, [&] { return energies_to_vector(energies_); },
