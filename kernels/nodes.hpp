@@ -18,20 +18,27 @@ struct NodeUpdateParams {
   double dtv;
   bool has_fext;
   // Ramped point loads (Model::fext_ramp): load_ramps groups, group g reaches its full force at
-  // load_ramp[g] s; load_scale[g] = min(1, t / load_ramp[g]) at the time t (set by load_scales).
+  // load_ramp[g] s; load_scale[g] = min(1, t / load_ramp[g]) at the time t, load_scale_next[g] at
+  // t + dt (set by load_scales).
   int load_ramps;
   double load_ramp[kLoadRampSlots];
-  double load_scale[kLoadRampSlots];
+  double load_scale[kLoadRampSlots], load_scale_next[kLoadRampSlots];
 };
 
-// The parameters with the ramped loads' factors at the time p.t of the current positions.
+// The parameters with the ramped loads' factors at the time p.t of the current positions and at
+// p.t + p.dt, that of the next.
 inline NodeUpdateParams load_scales(NodeUpdateParams p) {
-  for (int g = 0; g < p.load_ramps; ++g) p.load_scale[g] = p.t >= p.load_ramp[g] ? 1.0 : p.t / p.load_ramp[g];
+  for (int g = 0; g < p.load_ramps; ++g) {
+    const double T = p.load_ramp[g], tn = p.t + p.dt;
+    p.load_scale[g] = p.t >= T ? 1.0 : p.t / T;
+    p.load_scale_next[g] = tn >= T ? 1.0 : tn / T;
+  }
   return p;
 }
 
 // Sums of one node update: energy dissipated by damping and work of the velocity BCs and of the
-// ramped point loads over this step (accumulated every step); on sampled steps also the kinetic
+// ramped point loads over this step (accumulated every step; the ramped loads' from x(n) to
+// x(n+1), the others centred on x(n)); on sampled steps also the kinetic
 // energy 0.5 m v(n-1/2).v(n+1/2) (the leap-frog's conserved form), the work of gravity and of the
 // constant point loads at x(n) (F . u: path-independent for a constant force), and the
 // linear momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (components beyond D stay 0).
@@ -86,9 +93,13 @@ struct NodeUpdate {
       double F = f(i, k) + mi * p.gravity[k];
       const double fe = p.has_fext ? fext(i, k) : 0.0;
       F += fe;
-      double fr = 0.0;  // ramped point loads at time p.t
+      double fr = 0.0, frn = 0.0;  // ramped point loads at time p.t and p.t + p.dt
       if (p.load_ramps > 0) {
-        for (int g = 0; g < p.load_ramps; ++g) fr += fext_ramp(g, i, k) * p.load_scale[g];
+        for (int g = 0; g < p.load_ramps; ++g) {
+          const double a = fext_ramp(g, i, k);
+          fr += a * p.load_scale[g];
+          frn += a * p.load_scale_next[g];
+        }
         F += fr;
       }
       const double vo = v(i, k);
@@ -108,7 +119,12 @@ struct NodeUpdate {
       } else {
         vn = vo + p.dtv * F / mi;
       }
-      if (p.load_ramps > 0) s.ramp_work += fr * 0.5 * (vo + vn) * p.dtv;
+      if (p.load_ramps > 0) {
+        if (bc >= 0 && (bcs(bc).mask >> k & 1))  // with the reaction's work, as the BC's work counts it
+          s.bc_work += fr * 0.5 * (vo + vn) * p.dtv;
+        else  // over the straight path x(n) -> x(n+1) with the force linear in time on it
+          s.ramp_work += 0.5 * (fr + frn) * vn * p.dt;
+      }
       if (Sample) {
         const double u = x(i, k) - X(i, k);
         s.kinetic += 0.5 * mi * vo * vn;

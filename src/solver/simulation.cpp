@@ -122,7 +122,9 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
     for (int k = 0; k < 3; ++k) e.momentum[k] = w.momentum[k];
     e.damping = work_damping_ + 0.5 * w.damping;
     e.work_external = wp + work_bc_ + 0.5 * w.bc_work + w.gravity_work + w.load_work;
-    if (prm_.load_ramps > 0) e.work_external += work_ramp_ + 0.5 * w.ramp_work;
+    // ramped point loads: each step's work spans [t, t + dt] (kernels/nodes.hpp), so the work by
+    // time t is that of the steps before
+    if (prm_.load_ramps > 0) e.work_external += work_ramp_;
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
                        e.fracture + e.damping + e.friction;
     if (!have_reference_) {
