@@ -75,8 +75,9 @@ struct NodeSums {
 // next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
 // the kinetic-energy change of a node exactly the work of the forces on it.
 // Damp = false: the scene has no damping (alpha = c = 0): no damping force, no damping work (the
-// results are the same as with Damp = true at zero damping).
-template <int D, bool Sample, bool Damp>
+// results are the same as with Damp = true at zero damping). Ramp: the scene has ramped point
+// loads (p.load_ramps > 0; without, the update is the one of constant loads alone).
+template <int D, bool Sample, bool Damp, bool Ramp>
 struct NodeUpdate {
   Kokkos::View<double* [D]> x, X, v, f, fext;
   Kokkos::View<double** [D]> fext_ramp;
@@ -94,7 +95,7 @@ struct NodeUpdate {
       const double fe = p.has_fext ? fext(i, k) : 0.0;
       F += fe;
       double fr = 0.0, frn = 0.0;  // ramped point loads at time p.t and p.t + p.dt
-      if (p.load_ramps > 0) {
+      if (Ramp) {
         for (int g = 0; g < p.load_ramps; ++g) {
           const double a = fext_ramp(g, i, k);
           fr += a * p.load_scale[g];
@@ -119,7 +120,7 @@ struct NodeUpdate {
       } else {
         vn = vo + p.dtv * F / mi;
       }
-      if (p.load_ramps > 0) {
+      if (Ramp) {
         if (bc >= 0 && (bcs(bc).mask >> k & 1))  // with the reaction's work, as the BC's work counts it
           s.bc_work += fr * 0.5 * (vo + vn) * p.dtv;
         else  // over the straight path x(n) -> x(n+1) with the force linear in time on it
@@ -152,18 +153,18 @@ struct NodeUpdateNoSums {
 // Update of all nodes. The sums are reduced only when there is something to sum: on sampled
 // steps, or when the scene has damping, velocity BCs or ramped point loads (their work is
 // accumulated every step); otherwise the pass is a plain parallel_for.
-template <int D, bool Sample, bool Damp>
+template <int D, bool Sample, bool Damp, bool Ramp>
 NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm_t) {
   const NodeUpdateParams prm = load_scales(prm_t);
-  const NodeUpdate<D, Sample, Damp> fn{
+  const NodeUpdate<D, Sample, Damp, Ramp> fn{
       m.x, m.X, m.v, m.f, m.fext, m.fext_ramp, m.mass, m.node_bc, m.bcs, prm, prm.t + 0.5 * prm.dt};
   NodeSums out;
-  const bool reduce = Sample || Damp || m.bcs.extent(0) > 0 || prm.load_ramps > 0;
+  const bool reduce = Sample || Damp || Ramp || m.bcs.extent(0) > 0;
   if (reduce) {
     Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, out);
   } else {
     Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp>>{fn});
+                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp, Ramp>>{fn});
   }
   return out;
 }
@@ -172,15 +173,15 @@ NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm_t) {
 // reduced into device memory (`sums`) and the damping, velocity-BC and ramped-load works added to
 // `work` (0: damping, 1: velocity BCs, 2: ramped point loads) there, in step order (Simulation
 // reads them on sampled steps).
-template <int D, bool Damp>
+template <int D, bool Damp, bool Ramp>
 void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm_t,
                             const Kokkos::View<NodeSums>& sums, const Kokkos::View<double[3]>& work) {
   const NodeUpdateParams prm = load_scales(prm_t);
-  const NodeUpdate<D, false, Damp> fn{
+  const NodeUpdate<D, false, Damp, Ramp> fn{
       m.x, m.X, m.v, m.f, m.fext, m.fext_ramp, m.mass, m.node_bc, m.bcs, prm, prm.t + 0.5 * prm.dt};
-  if (!(Damp || m.bcs.extent(0) > 0 || prm.load_ramps > 0)) {
+  if (!(Damp || Ramp || m.bcs.extent(0) > 0)) {
     Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-                         NodeUpdateNoSums<NodeUpdate<D, false, Damp>>{fn});
+                         NodeUpdateNoSums<NodeUpdate<D, false, Damp, Ramp>>{fn});
     return;
   }
   Kokkos::parallel_reduce("fdem::nodes [device]", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, sums);
