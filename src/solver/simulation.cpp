@@ -197,15 +197,19 @@ NodeSums Simulation<D>::update_nodes_now(bool sample) {
   if (prm_.load_ramps > 0) {  // ramped point loads
     if (sample)
       return damp ? update_nodes<D, true, true, true>(m, prm_) : update_nodes<D, true, false, true>(m, prm_);
-    if (damp) update_nodes_unsampled<D, true, true>(m, prm_, node_sums_, work_dev_);
-    else update_nodes_unsampled<D, false, true>(m, prm_, node_sums_, work_dev_);
+    if (damp)
+      update_nodes_unsampled<D, true, true>(m, prm_, node_sums_, work_dev_);
+    else
+      update_nodes_unsampled<D, false, true>(m, prm_, node_sums_, work_dev_);
     return NodeSums{};
   }
   if (sample)
     return damp ? update_nodes<D, true, true, false>(m, prm_) : update_nodes<D, true, false, false>(m, prm_);
   // unsampled: the works are summed on the device (work_dev_; book_energies)
-  if (damp) update_nodes_unsampled<D, true, false>(m, prm_, node_sums_, work_dev_);
-  else update_nodes_unsampled<D, false, false>(m, prm_, node_sums_, work_dev_);
+  if (damp)
+    update_nodes_unsampled<D, true, false>(m, prm_, node_sums_, work_dev_);
+  else
+    update_nodes_unsampled<D, false, false>(m, prm_, node_sums_, work_dev_);
   return NodeSums{};
 }
 
