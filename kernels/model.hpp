@@ -44,6 +44,9 @@ struct NodeData {
   Kokkos::View<int*> node_bc;      // -1: free; else index into bcs
   Kokkos::View<BCDev*> bcs;
   Kokkos::View<double* [D]> fext;  // constant point loads (extent 0 when there are none)
+  // Ramped point loads: fext_ramp(g, i, k) is node i's full force of the loads with the g-th ramp
+  // time (Simulation's load ramp table; extent 0 when no load ramps)
+  Kokkos::View<double** [D]> fext_ramp;
 };
 
 template <int D>

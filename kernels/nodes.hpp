@@ -6,6 +6,8 @@
 
 namespace fdem {
 
+constexpr int kLoadRampSlots = 8;  // distinct ramp times of the point loads (kMaxLoadRamps, io/case.hpp)
+
 struct NodeUpdateParams {
   double gravity[3];
   double alpha;      // local non-viscous damping
@@ -15,21 +17,41 @@ struct NodeUpdateParams {
   // step where dt changes (Simulation: contact's stable step applies once surfaces can meet).
   double dtv;
   bool has_fext;
+  // Ramped point loads (Model::fext_ramp): load_ramps groups, group g reaches its full force at
+  // load_ramp[g] s; load_scale[g] = min(1, t / load_ramp[g]) at the time t, load_scale_next[g] at
+  // t + dt (set by load_scales).
+  int load_ramps;
+  double load_ramp[kLoadRampSlots];
+  double load_scale[kLoadRampSlots], load_scale_next[kLoadRampSlots];
 };
 
-// Sums of one node update: energy dissipated by damping and work of the velocity BCs over this
-// step (accumulated every step); on sampled steps also the kinetic energy 0.5 m v(n-1/2).v(n+1/2)
-// (the leap-frog's conserved form), the work of gravity and of the point loads at x(n), and the
+// The parameters with the ramped loads' factors at the time p.t of the current positions and at
+// p.t + p.dt, that of the next.
+inline NodeUpdateParams load_scales(NodeUpdateParams p) {
+  for (int g = 0; g < p.load_ramps; ++g) {
+    const double T = p.load_ramp[g], tn = p.t + p.dt;
+    p.load_scale[g] = p.t >= T ? 1.0 : p.t / T;
+    p.load_scale_next[g] = tn >= T ? 1.0 : tn / T;
+  }
+  return p;
+}
+
+// Sums of one node update: energy dissipated by damping and work of the velocity BCs and of the
+// ramped point loads over this step (accumulated every step; the ramped loads' from x(n) to
+// x(n+1), the others centred on x(n)); on sampled steps also the kinetic
+// energy 0.5 m v(n-1/2).v(n+1/2) (the leap-frog's conserved form), the work of gravity and of the
+// constant point loads at x(n) (F . u: path-independent for a constant force), and the
 // linear momentum sum m (v(n-1/2) + v(n+1/2)) / 2 at time n (components beyond D stay 0).
 // A parallel_reduce result type in Kokkos 3.4.1 (volatile join) and 4.x (plain join).
 struct NodeSums {
-  double damping = 0, bc_work = 0;
+  double damping = 0, bc_work = 0, ramp_work = 0;
   double kinetic = 0, gravity_work = 0, load_work = 0;
   double momentum[3] = {0, 0, 0};
   KOKKOS_INLINE_FUNCTION NodeSums() {}
   KOKKOS_INLINE_FUNCTION NodeSums& operator+=(const NodeSums& o) {
     damping += o.damping;
     bc_work += o.bc_work;
+    ramp_work += o.ramp_work;
     kinetic += o.kinetic;
     gravity_work += o.gravity_work;
     load_work += o.load_work;
@@ -40,6 +62,7 @@ struct NodeSums {
   KOKKOS_INLINE_FUNCTION void operator+=(const volatile NodeSums& o) volatile {
     damping += o.damping;
     bc_work += o.bc_work;
+    ramp_work += o.ramp_work;
     kinetic += o.kinetic;
     gravity_work += o.gravity_work;
     load_work += o.load_work;
@@ -52,10 +75,12 @@ struct NodeSums {
 // next step. The work of a force over the step is F . (v(n-1/2) + v(n+1/2)) dt / 2, which makes
 // the kinetic-energy change of a node exactly the work of the forces on it.
 // Damp = false: the scene has no damping (alpha = c = 0): no damping force, no damping work (the
-// results are the same as with Damp = true at zero damping).
-template <int D, bool Sample, bool Damp>
+// results are the same as with Damp = true at zero damping). Ramp: the scene has ramped point
+// loads (p.load_ramps > 0; without, the update is the one of constant loads alone).
+template <int D, bool Sample, bool Damp, bool Ramp>
 struct NodeUpdate {
   Kokkos::View<double* [D]> x, X, v, f, fext;
+  Kokkos::View<double** [D]> fext_ramp;
   Kokkos::View<double*> mass;
   Kokkos::View<int*> node_bc;
   Kokkos::View<BCDev*> bcs;
@@ -69,6 +94,15 @@ struct NodeUpdate {
       double F = f(i, k) + mi * p.gravity[k];
       const double fe = p.has_fext ? fext(i, k) : 0.0;
       F += fe;
+      double fr = 0.0, frn = 0.0;  // ramped point loads at time p.t and p.t + p.dt
+      if (Ramp) {
+        for (int g = 0; g < p.load_ramps; ++g) {
+          const double a = fext_ramp(g, i, k);
+          fr += a * p.load_scale[g];
+          frn += a * p.load_scale_next[g];
+        }
+        F += fr;
+      }
       const double vo = v(i, k);
       double vn;
       if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
@@ -85,6 +119,12 @@ struct NodeUpdate {
         s.damping -= fd * 0.5 * (vo + vn) * p.dtv;
       } else {
         vn = vo + p.dtv * F / mi;
+      }
+      if (Ramp) {
+        if (bc >= 0 && (bcs(bc).mask >> k & 1))  // with the reaction's work, as the BC's work counts it
+          s.bc_work += fr * 0.5 * (vo + vn) * p.dtv;
+        else  // over the straight path x(n) -> x(n+1) with the force linear in time on it
+          s.ramp_work += 0.5 * (fr + frn) * vn * p.dt;
       }
       if (Sample) {
         const double u = x(i, k) - X(i, k);
@@ -111,34 +151,37 @@ struct NodeUpdateNoSums {
 };
 
 // Update of all nodes. The sums are reduced only when there is something to sum: on sampled
-// steps, or when the scene has damping or velocity BCs (their work is accumulated every step);
-// otherwise the pass is a plain parallel_for.
-template <int D, bool Sample, bool Damp>
-NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm) {
-  const NodeUpdate<D, Sample, Damp> fn{m.x, m.X, m.v, m.f, m.fext, m.mass, m.node_bc, m.bcs, prm,
-                                       prm.t + 0.5 * prm.dt};
+// steps, or when the scene has damping, velocity BCs or ramped point loads (their work is
+// accumulated every step); otherwise the pass is a plain parallel_for.
+template <int D, bool Sample, bool Damp, bool Ramp>
+NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm_t) {
+  const NodeUpdateParams prm = load_scales(prm_t);
+  const NodeUpdate<D, Sample, Damp, Ramp> fn{
+      m.x, m.X, m.v, m.f, m.fext, m.fext_ramp, m.mass, m.node_bc, m.bcs, prm, prm.t + 0.5 * prm.dt};
   NodeSums out;
-  const bool reduce = Sample || Damp || m.bcs.extent(0) > 0;
+  const bool reduce = Sample || Damp || Ramp || m.bcs.extent(0) > 0;
   if (reduce) {
     Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, out);
   } else {
     Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp>>{fn});
+                         NodeUpdateNoSums<NodeUpdate<D, Sample, Damp, Ramp>>{fn});
   }
   return out;
 }
 
 // The update of an unsampled step (Sample = false) without a wait for the host: the sums are
-// reduced into device memory (`sums`) and the damping and velocity-BC works added to `work`
-// (0: damping, 1: velocity BCs) there, in step order (Simulation reads them on sampled steps).
-template <int D, bool Damp>
-void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm,
-                            const Kokkos::View<NodeSums>& sums, const Kokkos::View<double[2]>& work) {
-  const NodeUpdate<D, false, Damp> fn{m.x, m.X, m.v, m.f, m.fext, m.mass, m.node_bc, m.bcs, prm,
-                                      prm.t + 0.5 * prm.dt};
-  if (!(Damp || m.bcs.extent(0) > 0)) {
+// reduced into device memory (`sums`) and the damping, velocity-BC and ramped-load works added to
+// `work` (0: damping, 1: velocity BCs, 2: ramped point loads) there, in step order (Simulation
+// reads them on sampled steps).
+template <int D, bool Damp, bool Ramp>
+void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm_t,
+                            const Kokkos::View<NodeSums>& sums, const Kokkos::View<double[3]>& work) {
+  const NodeUpdateParams prm = load_scales(prm_t);
+  const NodeUpdate<D, false, Damp, Ramp> fn{
+      m.x, m.X, m.v, m.f, m.fext, m.fext_ramp, m.mass, m.node_bc, m.bcs, prm, prm.t + 0.5 * prm.dt};
+  if (!(Damp || Ramp || m.bcs.extent(0) > 0)) {
     Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
-                         NodeUpdateNoSums<NodeUpdate<D, false, Damp>>{fn});
+                         NodeUpdateNoSums<NodeUpdate<D, false, Damp, Ramp>>{fn});
     return;
   }
   Kokkos::parallel_reduce("fdem::nodes [device]", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, sums);
@@ -148,6 +191,7 @@ void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm,
       "fdem::nodes::work", Kokkos::RangePolicy<ExecSpace>(0, 1), KOKKOS_LAMBDA(const int) {
         w(0) += s().damping;
         w(1) += s().bc_work;
+        w(2) += s().ramp_work;
       });
 }
 

@@ -95,6 +95,19 @@ def plot_cracks(out, nframes, magnify):
         elems = mesh["elements"][()]
         ifaces = mesh["interfaces"][()]
         X = mesh["reference_coordinates"][()][:, :2]
+        # Elements coloured by region when there are several (grains of minerals), else grey.
+        names = [n.decode() if isinstance(n, bytes) else str(n) for n in mesh["region_names"][()]] \
+            if "region_names" in mesh else []
+        face = "#e8e8e8"
+        legend = []
+        if len(names) > 1:
+            from matplotlib.patches import Patch
+
+            palette = ["#f2d7d0", "#d5e3f0", "#e4ecd2", "#efe2c0", "#e3d7ec", "#d3ece8", "#ecd3e0"]
+            region = mesh["region"][()]
+            face = [palette[r % len(palette)] for r in region]
+            legend = [Patch(facecolor=palette[i % len(palette)], edgecolor="#b0b0b0", label=n)
+                      for i, n in enumerate(names)]
         steps = sorted(k for k in f.keys() if k.startswith("step_"))
         if not steps:
             return []
@@ -107,7 +120,9 @@ def plot_cracks(out, nframes, magnify):
             x = X + mag * g["displacement"][()][:, :2]
             dmg = g["damage"][()]
             fig, ax = plt.subplots(figsize=(6.5, 6.5))
-            ax.add_collection(PolyCollection(x[elems], facecolor="#e8e8e8", edgecolor="#c8c8c8", linewidths=0.2))
+            ax.add_collection(PolyCollection(x[elems], facecolor=face, edgecolor="#c8c8c8", linewidths=0.2))
+            if legend:
+                ax.legend(handles=legend, loc="upper right", fontsize=8, framealpha=0.8)
             if len(ifaces):
                 seg = x[ifaces]
                 damaged = (dmg > 0) & (dmg < 1)

@@ -386,6 +386,7 @@ TEST(CaseErrors, OutOfRangeNamesPathValueAndRange) {
       {"/platens/0/kn", -1, "platens.0.kn", ">= 0"},
       {"/platens/0/cohesion", -1, "platens.0.cohesion", ">= 0"},
       {"/boundary/velocity/0/ramp_time", -1, "boundary.velocity.0.ramp_time", ">= 0"},
+      {"/boundary/point_loads/0/ramp_time", -1, "boundary.point_loads.0.ramp_time", ">= 0"},
       {"/output/history_rows", 0, "output.history_rows", ">= 1"},
       {"/dimension", 4, "dimension", "2 to 3"},
   };

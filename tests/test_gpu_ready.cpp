@@ -236,6 +236,43 @@ TEST(GpuReady, UnsampledStepsDoNotWaitForTheDevice3D) { unsampled_steps_scene<3>
 TEST(GpuReady, UnsampledStepsWithHandoversDoNotWaitForTheDevice2D) { unsampled_steps_scene<2>(true); }
 TEST(GpuReady, UnsampledStepsWithHandoversDoNotWaitForTheDevice3D) { unsampled_steps_scene<3>(true); }
 
+// Ramped point loads (boundary.point_loads[].ramp_time) in a scene without damping, velocity BCs
+// or contact: their work is summed every step, on the device (one reduction into device memory
+// per unsampled step), with no fence, copy or host reduction; the ledger then closes.
+TEST(GpuReady, RampedPointLoadsSumTheirWorkOnTheDevice) {
+  const HostMesh mesh = generate_crossed_rectangle(0, 0, 0.1, 0.01, 20, 1);
+  Case c = fdem_test::basic_case(2, 10e9, 0.0, 2500);
+  PointLoad a, b;
+  a.set = "right";
+  a.force = {300, 0, 0};
+  a.ramp_time = 1e-4;
+  b.set = "top";
+  b.force = {0, -50, 0};
+  b.ramp_time = 4e-5;
+  c.point_loads = {a, b};
+  Simulation<2> sim(c, mesh);
+  ASSERT_EQ(sim.contact(), nullptr);
+  sim.step(true);
+  Recorded r;
+  const int n = 100;
+  {
+    Hooks hooks;
+    const long fences = fence_count();
+    g_rec = &r;
+    for (int s = 0; s < n; ++s) sim.step(false);
+    g_rec = nullptr;
+    for (long k = fences; k < fence_count(); ++k) r.fences.push_back("fdem::fence");
+  }
+  EXPECT_TRUE(r.fences.empty()) << "fences" << list(r.fences);
+  EXPECT_TRUE(r.copies.empty()) << "copies" << list(r.copies);
+  EXPECT_TRUE(r.host_reductions.empty()) << "host reductions" << list(r.host_reductions);
+  EXPECT_EQ(r.device_reductions, n);
+  sim.step(true);
+  const Energies& e = sim.energies();
+  EXPECT_GT(e.work_external, 0.0);
+  EXPECT_NEAR(e.kinetic + e.strain, e.work_external, 1e-7 * e.work_external);
+}
+
 // The test can fail: the hooks see what a sampled step asks for (its clocks fence, the energies are
 // reductions into host values, the platen accumulators are copied to the host).
 TEST(GpuReady, HooksSeeWhatASampledStepAsksFor) {

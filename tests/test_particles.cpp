@@ -42,7 +42,7 @@ ParticleSpec spheres(int n) {
 
 // Body of every element (elements joined through shared nodes) and the body count.
 int bodies_of(const HostMesh& m, std::vector<int>& body) {
-  fdem::mesh_detail::UnionFind uf(m.num_nodes());
+  fdem::UnionFind uf(m.num_nodes());
   for (int e = 0; e < m.num_elems(); ++e)
     for (int a = 1; a < 4; ++a) uf.join(m.elems[4 * e], m.elems[4 * e + a]);
   std::vector<int> id(m.num_nodes(), -1);

@@ -58,9 +58,14 @@ struct VelocityBC {
   double ramp_time = 0;  // velocity rises linearly from 0 over this time (0: at once)
 };
 
+// Distinct ramp times > 0 the point loads of a case may have (the node update keeps a force per
+// node for each: kLoadRampSlots in kernels/nodes.hpp).
+constexpr int kMaxLoadRamps = 8;
+
 struct PointLoad {
   std::string set;
   Vec3 force{0, 0, 0};  // total force, shared equally by the nodes of the set
+  double ramp_time = 0;  // force rises linearly from 0 over this time (0: at once)
 };
 
 struct InitialVelocity {

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -48,17 +49,24 @@ void read_velocity(json& b, Case& c, const Reader& R) {
   }
 }
 
-// "boundary.point_loads": [{"set", "force"}].
+// "boundary.point_loads": [{"set", "force", "ramp_time"}].
 void read_point_loads(json& b, Case& c, const Reader& R) {
   const int d = c.dim;
   const std::string P = "boundary";
   json& loads = R.array(b, P, "point_loads", false);
+  std::set<double> ramps;
   for (size_t i = 0; i < loads.size(); ++i) {
     const std::string p = child(child(P, "point_loads"), i);
-    R.keys(loads[i], p, {"set", "force"});
+    R.keys(loads[i], p, {"set", "force", "ramp_time"});
     PointLoad pl;
     pl.set = R.name(loads[i], p, "set");
     pl.force = R.vec(loads[i], p, "force", d);
+    pl.ramp_time = R.number(loads[i], p, "ramp_time", ge(0), 0.0);
+    ramps.insert(pl.ramp_time);
+    if (ramps.size() - ramps.count(0.0) > static_cast<size_t>(kMaxLoadRamps))
+      R.fail(child(p, "ramp_time"), "more than " + std::to_string(kMaxLoadRamps) +
+                                        " different ramp times among the point loads (allowed: at most " +
+                                        std::to_string(kMaxLoadRamps) + " distinct values > 0)");
     c.point_loads.push_back(pl);
   }
 }

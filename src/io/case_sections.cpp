@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/case_internal.hpp"
+#include "io/case_text.hpp"
 
 namespace fdem::case_detail {
 namespace {
@@ -69,20 +70,69 @@ void read_block_generator(json& m, MeshSpec& s, int d, const std::string& g, con
   if (has_h) s.element_size = R.number(m, P, "element_size", gt(0));
 }
 
-// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere, particles (3D).
+// "mesh": {"generator": "grains", ...}: a Voronoi grain specimen (disc or rectangle; box in 3D).
+void read_grains_generator(json& m, MeshSpec& s, int d, const Reader& R) {
+  const std::string P = "mesh";
+  R.keys(m, P,
+         {"generator", "shape", "center", "radius", "origin", "size", "grain_size", "element_size", "seed",
+          "minerals", "region", "mesher"});
+  s.shape = R.string(m, P, "shape");
+  if (d == 3 && s.shape != "box") R.fail(child(P, "shape"), "unknown 3D shape '" + s.shape + "' (allowed: box)");
+  if (d == 2 && s.shape == "box") R.fail(child(P, "shape"), "'box' is a 3D shape (allowed in 2D: disc, rectangle)");
+  if (s.shape == "disc") {
+    for (const char* k : {"origin", "size"})
+      if (m.contains(k))
+        R.fail(child(P, k), "applies to shape 'rectangle' only (a disc takes center, radius)");
+    s.origin = R.vec(m, P, "center", 2, Vec3{0, 0, 0});
+    s.radius = R.number(m, P, "radius", gt(0));
+  } else if (s.shape == "rectangle" || s.shape == "box") {
+    for (const char* k : {"center", "radius"})
+      if (m.contains(k)) R.fail(child(P, k), "applies to shape 'disc' only (a " + s.shape + " takes origin, size)");
+    s.origin = R.vec(m, P, "origin", d, Vec3{0, 0, 0});
+    s.size = R.vec(m, P, "size", d, std::nullopt, gt(0));
+  } else {
+    R.fail(child(P, "shape"), "unknown shape '" + s.shape + "' (allowed: disc, rectangle)");
+  }
+  s.element_size = R.number(m, P, "element_size", gt(0));
+  s.grain_size = R.number(m, P, "grain_size", ge(2 * s.element_size));
+  s.seed = static_cast<unsigned long>(R.integer(m, P, "seed", 0, 4294967295L, 1));
+  if (m.contains("mesher")) {  // 3D only, not written when absent
+    if (d != 3) R.fail(child(P, "mesher"), "applies to 3D grains only (2D grains are meshed by Gmsh's Delaunay)");
+    s.mesher = R.string(m, P, "mesher");
+    if (s.mesher != "delaunay" && s.mesher != "hxt")
+      R.fail(child(P, "mesher"), "unknown mesher '" + s.mesher + "' (allowed: delaunay, hxt)");
+  }
+  if (m.contains("minerals")) {
+    json& mj = R.object(m, P, "minerals", true);
+    const std::string mp = child(P, "minerals");
+    if (mj.empty()) R.fail(mp, "give at least one mineral: {\"<region>\": <area fraction>, ...}");
+    double sum = 0;
+    for (auto& [name, v] : mj.items()) {
+      if (!valid_name(name))
+        R.fail(mp, "'" + name + "' is not a valid region name (allowed: letters, digits, '_', '-', '.')");
+      const double f = R.number_value(v, child(mp, name), between(0, true, 1, false));
+      s.minerals.push_back({name, f});
+      sum += f;
+    }
+    if (std::abs(sum - 1) > 1e-6)
+      R.fail(mp, "the area fractions add up to " + std::to_string(sum) + " (allowed: 1 within 1e-6)");
+  }
+}
+
+// "mesh": {"generator": ...}: rectangle, disc (2D), box, sphere, particles (3D), grains (both).
 void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const std::string P = "mesh";
   MeshSpec& s = c.mesh;
-  const std::vector<std::string> gens = {"rectangle", "disc", "box", "sphere", "particles"};
+  const std::vector<std::string> gens = {"rectangle", "disc", "grains", "box", "sphere", "particles"};
   std::string g = R.string(m, P, "generator");
   if (std::find(gens.begin(), gens.end(), g) == gens.end())
     R.fail(child(P, "generator"), "unknown generator '" + g + "'" + did_you_mean(g, gens) +
-                                      " (allowed: rectangle, disc (2D); box, sphere, particles (3D))");
+                                      " (allowed: rectangle, disc (2D); box, sphere, particles (3D); grains)");
   const bool is2 = g == "rectangle" || g == "disc";
-  if ((is2 ? 2 : 3) != c.dim)
+  if (g != "grains" && (is2 ? 2 : 3) != c.dim)
     R.fail(child(P, "generator"), "generator '" + g + "' makes a " + (is2 ? "2D" : "3D") +
                                       " mesh but dimension is " + std::to_string(c.dim) + " (allowed: " +
-                                      (c.dim == 2 ? "rectangle, disc" : "box, sphere, particles") + ")");
+                                      (c.dim == 2 ? "rectangle, disc, grains" : "box, sphere, grains, particles") + ")");
   s.kind = g;
   if (g == "particles") {  // many particles, each its own body (src/io/case_particles.cpp)
     read_particles_generator(m, s, R);
@@ -91,6 +141,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
   const int d = c.dim;
   if (g == "rectangle" || g == "box") {
     read_block_generator(m, s, d, g, R);
+  } else if (g == "grains") {
+    read_grains_generator(m, s, d, R);
   } else {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});

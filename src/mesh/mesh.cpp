@@ -11,6 +11,7 @@
 #include <unordered_set>
 
 #include "common/error.hpp"
+#include "mesh/grains.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
 #include "mesh/particles.hpp"
@@ -439,8 +440,18 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     need_dim(3);
     return generate_particles(spec.particles, spec.element_size, spec.region);
   }
+  if (spec.kind == "grains") {
+    const double pi = std::acos(-1.0), h = spec.element_size;
+    const double measure = dim == 3               ? spec.size[0] * spec.size[1] * spec.size[2]
+                           : spec.shape == "disc" ? pi * spec.radius * spec.radius
+                                                  : spec.size[0] * spec.size[1];
+    if (h > 0 && measure > 0)
+      check_fits_in_memory(estimate_gmsh_elements(dim, measure, h), dim,
+                           "mesh.element_size = " + fmt(h) + " m (grains)", h);
+    return dim == 3 ? generate_grains_3d(spec) : generate_grains(spec);
+  }
   throw InputError("mesh: unknown kind '" + spec.kind +
-                   "' (expected file, rectangle, disc, box or sphere)");
+                   "' (expected file, rectangle, disc, box, sphere, particles or grains)");
 }
 
 }  // namespace fdem

@@ -5,6 +5,7 @@
 #include <array>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "mesh/particle_spec.hpp"
@@ -45,7 +46,7 @@ struct HostMesh {
 
 // What a case file's "mesh" object asks for (see docs/case-format.md).
 struct MeshSpec {
-  std::string kind;         // "file", "rectangle", "disc", "box", "sphere"
+  std::string kind;         // "file", "rectangle", "disc", "box", "sphere", "grains"
   std::string file;         // kind == "file": path, already resolved against the case file's folder
   double element_size = 0;  // generators (disc, sphere; rectangle/box derive nx,ny,nz if not given);
                             // .geo files: upper bound on the element size (0: the file's own)
@@ -58,6 +59,13 @@ struct MeshSpec {
   std::string region = "body";            // generators: name of the single region
   std::string mesher = "delaunay";        // sphere: Gmsh's 3D algorithm, "delaunay" or "hxt"
   ParticleSpec particles;                 // kind "particles" (src/mesh/particles.cpp)
+  // grains (src/mesh/grains.hpp): the specimen's shape ("disc": origin, radius; "rectangle":
+  // origin, size), the mean grain diameter, the seed of the tessellation, and the minerals (region
+  // names) with their area fractions.
+  std::string shape;
+  double grain_size = 0;
+  unsigned long seed = 1;
+  std::vector<std::pair<std::string, double>> minerals;
 };
 
 // Readers and generators. All throw InputError with a message naming the file (or generator), the
@@ -80,7 +88,7 @@ HostMesh generate_box(const std::array<double, 3>& origin, const std::array<doub
                       int nx, int ny, int nz, const std::string& region = "body");
 // Sphere of radius R, unstructured tetrahedra of size h (Gmsh). Node sets: "surface", "all".
 // mesher "delaunay" (Gmsh's Algorithm3D 1) or "hxt" (10: about 8 times faster at 1e6
-// tetrahedra, another mesh; one thread, so that the mesh does not depend on the machine).
+// tetrahedra, another mesh; one thread; not reproducible between invocations: docs/case-format.md).
 HostMesh generate_sphere(const std::array<double, 3>& centre, double R, double h,
                          const std::string& region = "body", const std::string& mesher = "delaunay");
 // Two meshes side by side as one (separate bodies): b's node ids, elements, regions and interfaces

@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/union_find.hpp"
 #include "mesh/mesh.hpp"
 
 namespace fdem::mesh_detail {
@@ -85,21 +86,6 @@ HostMesh generate_with_gmsh(const std::string& who, const std::string& doing, in
 // Format a double compactly (like %g with 6 significant digits).
 std::string fmt(double v);
 
-// Union-find over 0..n-1 with path halving; a set's root is its smallest member.
-struct UnionFind {
-  std::vector<int> parent;
-  explicit UnionFind(int n = 0) : parent(n) {
-    for (int i = 0; i < n; ++i) parent[i] = i;
-  }
-  int find(int i) {
-    while (parent[i] != i) i = parent[i] = parent[parent[i]];
-    return i;
-  }
-  void join(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[a > b ? a : b] = a < b ? a : b;
-  }
-};
+using fdem::UnionFind;  // src/common/union_find.hpp
 
 }  // namespace fdem::mesh_detail

@@ -3,46 +3,24 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
-#include <numeric>
 #include <string>
 #include <unordered_map>
 
 #include "common/error.hpp"
+#include "common/union_find.hpp"
 #include "kernels/contact/geometry.hpp"
 
 namespace fdem {
-
-namespace {
-
-// Union-find with path halving.
-struct UnionFind {
-  std::vector<int> p;
-  explicit UnionFind(int n) : p(n) { std::iota(p.begin(), p.end(), 0); }
-  int find(int a) {
-    while (p[a] != a) {
-      p[a] = p[p[a]];
-      a = p[a];
-    }
-    return a;
-  }
-  void unite(int a, int b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) p[std::max(a, b)] = std::min(a, b);
-  }
-};
-
-}  // namespace
 
 int count_bodies(const HostMesh& mesh) {
   const int nn = mesh.num_nodes(), ne = mesh.num_elems(), ni = mesh.num_ifaces(), d = mesh.dim;
   UnionFind uf(nn);
   for (int e = 0; e < ne; ++e)
     for (int a = 1; a <= d; ++a)
-      uf.unite(mesh.elems[static_cast<size_t>(e) * (d + 1)], mesh.elems[static_cast<size_t>(e) * (d + 1) + a]);
+      uf.join(mesh.elems[static_cast<size_t>(e) * (d + 1)], mesh.elems[static_cast<size_t>(e) * (d + 1) + a]);
   for (int q = 0; q < ni; ++q)
     for (int k = 0; k < d; ++k)
-      uf.unite(mesh.ifaces[static_cast<size_t>(q) * 2 * d + k], mesh.ifaces[static_cast<size_t>(q) * 2 * d + d + k]);
+      uf.join(mesh.ifaces[static_cast<size_t>(q) * 2 * d + k], mesh.ifaces[static_cast<size_t>(q) * 2 * d + d + k]);
   std::vector<char> seen(nn, 0);
   int n = 0;
   for (int e = 0; e < ne; ++e) {
@@ -237,7 +215,7 @@ HostVertexGroups vertex_groups(const HostMesh& mesh) {
   UnionFind uf(nn);
   for (int q = 0; q < ni; ++q)
     for (int k = 0; k < D; ++k)
-      uf.unite(mesh.ifaces[static_cast<size_t>(q) * 2 * D + k], mesh.ifaces[static_cast<size_t>(q) * 2 * D + D + k]);
+      uf.join(mesh.ifaces[static_cast<size_t>(q) * 2 * D + k], mesh.ifaces[static_cast<size_t>(q) * 2 * D + D + k]);
   for (int i = 0; i < nn; ++i) vgrp[i] = uf.find(i);
   // groups that have interface pairs: their entries (q * D + k) and their copies
   std::vector<int> gid(nn, -1);

@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "common/error.hpp"
+#include "common/union_find.hpp"
 #include "io/output.hpp"
-#include "mesh/mesh_internal.hpp"
 
 namespace fdem {
 
@@ -14,7 +14,7 @@ template <int D>
 int initial_bodies(const Model<D>& m, std::vector<int>& body) {
   auto el = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.elem);
   auto fc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.iface);
-  mesh_detail::UnionFind uf(m.nn);
+  UnionFind uf(m.nn);  // src/common/union_find.hpp
   for (int e = 0; e < m.ne; ++e)
     for (int a = 1; a <= D; ++a) uf.join(el(e, 0), el(e, a));
   for (int i = 0; i < m.ni; ++i) uf.join(fc(i, 0), fc(i, D));  // every interface, failed or not

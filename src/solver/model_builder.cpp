@@ -330,7 +330,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   bc_nodes_ = bcs.nodes;
   reactions_.assign(bc_nodes_.size(), {0, 0, 0});
 
-  build_point_loads<D>(c, mesh, m);
+  const std::vector<double> load_ramps = build_point_loads<D>(c, mesh, m);
   for (int k = 0; k < 3; ++k) gravity_[k] = c.gravity[k];
   set_initial_velocities<D>(c, mesh, bcs, m);
 
@@ -358,6 +358,8 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   prm_.cmass = c.mass_damping;
   for (int k = 0; k < 3; ++k) prm_.gravity[k] = c.gravity[k];
   prm_.has_fext = m.fext.extent(0) > 0;
+  prm_.load_ramps = static_cast<int>(load_ramps.size());
+  for (size_t g = 0; g < load_ramps.size(); ++g) prm_.load_ramp[g] = load_ramps[g];
   scatter_ = ForceScatter<D>(m.f);
 }
 

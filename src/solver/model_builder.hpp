@@ -87,9 +87,11 @@ struct VelocityBCTable {
 template <int D>
 VelocityBCTable build_velocity_bcs(const Case& c, const HostMesh& mesh, Model<D>& m);
 
-// Point loads: the total force of each load shared by its set's nodes (m.fext; extent 0 without).
+// Point loads: the total force of each load shared by its set's nodes; the constant loads in
+// m.fext (extent 0 without), the ramped ones in m.fext_ramp, one group per distinct ramp time
+// (extent 0 without). Returns the groups' ramp times (empty without ramped loads).
 template <int D>
-void build_point_loads(const Case& c, const HostMesh& mesh, Model<D>& m);
+std::vector<double> build_point_loads(const Case& c, const HostMesh& mesh, Model<D>& m);
 
 // Initial velocities of regions, then the velocity BCs' values at the start (0 for a ramp).
 template <int D>

@@ -4,8 +4,11 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "common/error.hpp"
+#include "kernels/nodes.hpp"
 #include "solver/model_builder.hpp"
 
 namespace fdem {
@@ -161,19 +164,37 @@ VelocityBCTable build_velocity_bcs(const Case& c, const HostMesh& mesh, Model<D>
 }
 
 template <int D>
-void build_point_loads(const Case& c, const HostMesh& mesh, Model<D>& m) {
-  if (c.point_loads.empty()) {
-    m.fext = Kokkos::View<double* [D]>("fdem::fext", 0);
-    return;
+std::vector<double> build_point_loads(const Case& c, const HostMesh& mesh, Model<D>& m) {
+  static_assert(kMaxLoadRamps <= kLoadRampSlots, "the node update holds every load ramp");
+  std::vector<double> ramps;  // distinct ramp times > 0, in the order of the loads
+  bool constant = false;
+  for (const auto& pl : c.point_loads) {
+    if (pl.ramp_time > 0 && std::find(ramps.begin(), ramps.end(), pl.ramp_time) == ramps.end())
+      ramps.push_back(pl.ramp_time);
+    constant = constant || !(pl.ramp_time > 0);
   }
-  m.fext = Kokkos::View<double* [D]>("fdem::fext", m.nn);
+  if (ramps.size() > static_cast<size_t>(kMaxLoadRamps))  // the case reader refuses these
+    throw InputError("'" + c.file + "': more than " + std::to_string(kMaxLoadRamps) +
+                     " distinct boundary.point_loads ramp_time values");
+  m.fext = Kokkos::View<double* [D]>("fdem::fext", constant ? m.nn : 0);
+  m.fext_ramp = Kokkos::View<double** [D]>("fdem::fext_ramp", ramps.size(), ramps.empty() ? 0 : m.nn);
   auto fe_h = mirror(m.fext);
+  auto fr_h = mirror(m.fext_ramp);
   for (const auto& pl : c.point_loads) {
     const auto& nodes = mesh.node_sets.at(pl.set);
-    for (int i : nodes)
-      for (int k = 0; k < D; ++k) fe_h(i, k) += pl.force[k] / static_cast<double>(nodes.size());
+    if (pl.ramp_time > 0) {
+      const size_t g =
+          static_cast<size_t>(std::find(ramps.begin(), ramps.end(), pl.ramp_time) - ramps.begin());
+      for (int i : nodes)
+        for (int k = 0; k < D; ++k) fr_h(g, i, k) += pl.force[k] / static_cast<double>(nodes.size());
+    } else {
+      for (int i : nodes)
+        for (int k = 0; k < D; ++k) fe_h(i, k) += pl.force[k] / static_cast<double>(nodes.size());
+    }
   }
   Kokkos::deep_copy(m.fext, fe_h);
+  Kokkos::deep_copy(m.fext_ramp, fr_h);
+  return ramps;
 }
 
 template <int D>
@@ -212,7 +233,7 @@ void set_initial_velocities(const Case& c, const HostMesh& mesh, const VelocityB
   template double platen_surface_step<D>(const Model<D>&, const std::vector<double>&,                       \
                                          const std::vector<double>&);                                       \
   template VelocityBCTable build_velocity_bcs<D>(const Case&, const HostMesh&, Model<D>&);                  \
-  template void build_point_loads<D>(const Case&, const HostMesh&, Model<D>&);                              \
+  template std::vector<double> build_point_loads<D>(const Case&, const HostMesh&, Model<D>&);               \
   template void set_initial_velocities<D>(const Case&, const HostMesh&, const VelocityBCTable&, Model<D>&);
 FDEM_BUILDERS(2)
 FDEM_BUILDERS(3)

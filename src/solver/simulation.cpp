@@ -122,6 +122,9 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
     for (int k = 0; k < 3; ++k) e.momentum[k] = w.momentum[k];
     e.damping = work_damping_ + 0.5 * w.damping;
     e.work_external = wp + work_bc_ + 0.5 * w.bc_work + w.gravity_work + w.load_work;
+    // ramped point loads: each step's work spans [t, t + dt] (kernels/nodes.hpp), so the work by
+    // time t is that of the steps before
+    if (prm_.load_ramps > 0) e.work_external += work_ramp_;
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
                        e.fracture + e.damping + e.friction;
     if (!have_reference_) {
@@ -135,6 +138,7 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
   }
   work_damping_ += w.damping;
   work_bc_ += w.bc_work;
+  work_ramp_ += w.ramp_work;
   push_works();
 }
 
@@ -144,6 +148,7 @@ void Simulation<D>::pull_works() const {
   Kokkos::deep_copy(h, work_dev_);
   work_damping_ = h(0);
   work_bc_ = h(1);
+  work_ramp_ = h(2);
 }
 
 template <int D>
@@ -151,6 +156,7 @@ void Simulation<D>::push_works() {
   auto h = Kokkos::create_mirror_view(work_dev_);
   h(0) = work_damping_;
   h(1) = work_bc_;
+  h(2) = work_ramp_;
   Kokkos::deep_copy(work_dev_, h);
 }
 
@@ -188,10 +194,22 @@ NodeSums Simulation<D>::update_nodes_now(bool sample) {
   prm_.dtv = dtv_next_ > 0 ? dtv_next_ : dt;
   dtv_next_ = 0;
   const bool damp = !skips.damping || prm_.alpha != 0.0 || prm_.cmass != 0.0;
-  if (sample) return damp ? update_nodes<D, true, true>(m, prm_) : update_nodes<D, true, false>(m, prm_);
+  if (prm_.load_ramps > 0) {  // ramped point loads
+    if (sample)
+      return damp ? update_nodes<D, true, true, true>(m, prm_) : update_nodes<D, true, false, true>(m, prm_);
+    if (damp)
+      update_nodes_unsampled<D, true, true>(m, prm_, node_sums_, work_dev_);
+    else
+      update_nodes_unsampled<D, false, true>(m, prm_, node_sums_, work_dev_);
+    return NodeSums{};
+  }
+  if (sample)
+    return damp ? update_nodes<D, true, true, false>(m, prm_) : update_nodes<D, true, false, false>(m, prm_);
   // unsampled: the works are summed on the device (work_dev_; book_energies)
-  if (damp) update_nodes_unsampled<D, true>(m, prm_, node_sums_, work_dev_);
-  else update_nodes_unsampled<D, false>(m, prm_, node_sums_, work_dev_);
+  if (damp)
+    update_nodes_unsampled<D, true, false>(m, prm_, node_sums_, work_dev_);
+  else
+    update_nodes_unsampled<D, false, false>(m, prm_, node_sums_, work_dev_);
   return NodeSums{};
 }
 
@@ -358,6 +376,8 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
   f.integer("simulation/step", step_count);
   f.real("simulation/work_damping", work_damping_);
   f.real("simulation/work_bc", work_bc_);
+  if (prm_.load_ramps > 0)  // ramped point loads (optional: checkpoints from before had none)
+    f.real("simulation/work_ramped_loads", work_ramp_, /*optional=*/true);
   f.real("simulation/energy_reference", reference_);
   f.integer("simulation/have_reference", have_reference_);
   f.values("simulation/energies", kEnergyFieldCount, [&] { return energies_to_vector(energies_); },

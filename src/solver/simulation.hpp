@@ -177,10 +177,11 @@ class Simulation {
   template <class Fields>
   void checkpoint_fields(Fields& f);
   double gravity_[3] = {0, 0, 0};
-  // Works of damping and velocity BCs so far: on the device (work_dev_: 0 damping, 1 BCs, summed
-  // there on unsampled steps), on the host on sampled steps (pull_works, then push_works).
-  mutable double work_damping_ = 0, work_bc_ = 0;
-  Kokkos::View<double[2]> work_dev_{"fdem::work"};
+  // Works of damping, velocity BCs and ramped point loads so far: on the device (work_dev_:
+  // 0 damping, 1 BCs, 2 ramped loads, summed there on unsampled steps), on the host on sampled
+  // steps (pull_works, then push_works).
+  mutable double work_damping_ = 0, work_bc_ = 0, work_ramp_ = 0;
+  Kokkos::View<double[3]> work_dev_{"fdem::work"};
   Kokkos::View<NodeSums> node_sums_{"fdem::node_sums"};
   void pull_works() const;
   void push_works();

@@ -98,7 +98,8 @@ nlohmann::json results_report(const Case& c, const Simulation<D>& sim, const His
   }
   if (np > 0) {
     results["peak_load_N"] = peak[0];
-    if (D == 2 && c.mesh.kind == "disc" && np >= 2) {  // not for a disc striking one plate
+    const bool disc = c.mesh.kind == "disc" || (c.mesh.kind == "grains" && c.mesh.shape == "disc");
+    if (D == 2 && disc && np >= 2) {  // not for a disc striking one plate
       // Brazilian test: sigma_t = 2 P / (pi D L)
       results["tensile_strength_Pa"] = 2 * peak[0] / (M_PI * 2 * c.mesh.radius * c.thickness);
     }

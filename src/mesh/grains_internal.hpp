@@ -1,0 +1,42 @@
+#pragma once
+// Pieces shared by the 2D and 3D grain generators (src/mesh/grains.cpp, grains3d.cpp).
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mesh/mesh.hpp"
+
+namespace fdem::grain_detail {
+
+// splitmix64: the same numbers on every platform and standard library.
+class Stream {
+ public:
+  explicit Stream(std::uint64_t seed) : s_(seed * 0x2545f4914f6cdd1dULL + 0x632be59bd9b4e019ULL) {}
+  double uniform() {  // in [0, 1)
+    std::uint64_t z = (s_ += 0x9e3779b97f4a7c15ULL);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    z ^= z >> 31;
+    return static_cast<double>(z >> 11) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t s_;
+};
+
+// Seeds in the box [lo, hi] (dim components drawn per try) for which inside() holds, at least half
+// a grain size d apart, as many as `measure` (area or volume) over a circle's (sphere's) of
+// diameter d. Throws InputError naming `who` for fewer than 2 or more than 20000 grains, or when
+// dart throwing cannot place them.
+std::vector<std::array<double, 3>> draw_seeds(
+    int dim, const double lo[3], const double hi[3], double measure, double d, std::uint64_t seed,
+    const std::string& who, const std::function<bool(const std::array<double, 3>&)>& inside);
+
+// Minerals by area (volume) fraction: grains in a random order (from spec.seed), each to the
+// mineral furthest below its share. No minerals in spec: one, named spec.region.
+void assign_minerals(const std::vector<double>& measure, const MeshSpec& spec, std::vector<int>& mineral,
+                     std::vector<std::string>& names, std::vector<double>& mineral_measure);
+
+}  // namespace fdem::grain_detail
