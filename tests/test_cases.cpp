@@ -44,6 +44,19 @@ std::vector<T> read_dataset(hid_t file, const std::string& name, hid_t type, std
   return out;
 }
 
+// Name of the last snapshot group ("step_...") of an open snapshots.h5, "" if none.
+std::string last_step(hid_t f) {
+  std::string last;
+  H5Literate(
+      f, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+      [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
+        if (std::string(name).rfind("step_", 0) == 0) *static_cast<std::string*>(data) = name;
+        return 0;
+      },
+      &last);
+  return last;
+}
+
 // Brazilian disc, reduced (issue 23: one mesh must not decide the strength): the case as shipped
 // (loaded diameter meshed as element edges, padded platens, 0.1 m/s per platen) on two of the four
 // R/12 meshes of the scatter study (4.10 and 4.38 mm; the default is 3 mm = R/17). Measured on
@@ -77,14 +90,7 @@ TEST_P(CaseBrazilianDiscMeshes, StrengthAndSplitAlongTheLoadedDiameter) {
   std::vector<hsize_t> dx, di, dd;
   const auto X = read_dataset<double>(f, "/mesh/reference_coordinates", H5T_NATIVE_DOUBLE, dx);
   const auto I = read_dataset<int>(f, "/mesh/interfaces", H5T_NATIVE_INT, di);
-  // last frame
-  std::string last;
-  H5Literate(f, H5_INDEX_NAME, H5_ITER_INC, nullptr,
-             [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
-               if (std::string(name).rfind("step_", 0) == 0) *static_cast<std::string*>(data) = name;
-               return 0;
-             },
-             &last);
+  const std::string last = last_step(f);  // the last frame
   ASSERT_FALSE(last.empty());
   const auto D = read_dataset<double>(f, "/" + last + "/damage", H5T_NATIVE_DOUBLE, dd);
   H5Fclose(f);
@@ -140,19 +146,12 @@ TEST(CaseGraniteBrazilian, ReducedRunSplitsAlongTheDiameterMostlyBetweenGrains) 
   const auto X = read_dataset<double>(f, "/mesh/reference_coordinates", H5T_NATIVE_DOUBLE, dx);
   const auto I = read_dataset<int>(f, "/mesh/interfaces", H5T_NATIVE_INT, di);
   const auto M = read_dataset<int>(f, "/mesh/interface_material", H5T_NATIVE_INT, dm);
-  std::string last;
-  H5Literate(
-      f, H5_INDEX_NAME, H5_ITER_INC, nullptr,
-      [](hid_t, const char* name, const H5L_info_t*, void* data) -> herr_t {
-        if (std::string(name).rfind("step_", 0) == 0) *static_cast<std::string*>(data) = name;
-        return 0;
-      },
-      &last);
+  const std::string last = last_step(f);  // the last frame
   ASSERT_FALSE(last.empty());
   const auto D = read_dataset<double>(f, "/" + last + "/damage", H5T_NATIVE_DOUBLE, dd);
   H5Fclose(f);
-  const int gb =
-      2;  // interface materials sorted by name: biotite_if, feldspar_if, grain_boundary_if, quartz_if
+  // interface materials sorted by name: biotite_if, feldspar_if, grain_boundary_if, quartz_if
+  const int gb = 2;
   double len_all = 0, len_gb = 0, crack = 0, crack_gb = 0, sum_abs_x = 0, ymin = 1, ymax = -1;
   int n = 0;
   for (size_t q = 0; q < D.size(); ++q) {
