@@ -177,6 +177,7 @@ TEST(Bodies, CliWarnsAboutTouchingBodies) {
   ASSERT_TRUE(report["mesh"].contains("warnings")) << report.dump(2);
   EXPECT_NE(report["mesh"]["warnings"][0].get<std::string>().find("3 pair(s) of coincident nodes"),
             std::string::npos);
+  EXPECT_EQ(report["mesh"]["bodies"].get<int>(), 2);  // the check reports the bodies at the start
 
   const std::string out =
       (fs::temp_directory_path() / ("fdem_bodies_touch_" + std::to_string(::getpid()))).string();
@@ -192,6 +193,8 @@ TEST(Bodies, CliWarnsAboutTouchingBodies) {
   const Cli one = fdem_cli("check " + kCase + mesh_set("one_body.msh"));
   EXPECT_EQ(one.status, 0) << one.err;
   EXPECT_EQ(one.err.find("warning"), std::string::npos) << one.err;
+  EXPECT_EQ(nlohmann::json::parse(one.out.substr(0, one.out.rfind("case OK")))["mesh"]["bodies"].get<int>(),
+            1);
 }
 
 }  // namespace

@@ -36,6 +36,8 @@ struct HostMesh {
   std::vector<int> node_origin;          // per node: its id before insertion (identity before)
   // Warnings of the checks before the run (check_bodies), for the check report and summary.json.
   std::vector<std::string> warnings;
+  // Bodies (elements joined through shared nodes) before interface insertion (check_bodies).
+  int bodies = 0;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

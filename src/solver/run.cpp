@@ -46,7 +46,9 @@ HostMesh prepare_mesh(const Case& c) {
   const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
   check_elements(mesh, source);
   check_case_against_mesh(c, mesh);
-  mesh.warnings = check_bodies(mesh, source).warnings;  // duplicate nodes, overlapping bodies
+  const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
+  mesh.warnings = bodies.warnings;
+  mesh.bodies = bodies.bodies;
   for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
   checks.stop();
   Phase reorder("renumbering");

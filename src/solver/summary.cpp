@@ -22,6 +22,7 @@ nlohmann::json mesh_report(const HostMesh& mesh) {
                         {"min_altitude_m", q.min_size},
                         {"mean_edge_m", q.mean_size}}}};
   if (!mesh.warnings.empty()) j["warnings"] = mesh.warnings;
+  if (mesh.bodies > 0) j["bodies"] = mesh.bodies;  // separate bodies at the start (particles)
   return j;
 }
 
