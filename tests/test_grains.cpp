@@ -174,7 +174,8 @@ TEST(Grains, BoxTessellationFillsTheBoxAndItsMeshKeepsTheMineralVolumes) {
   }
   EXPECT_EQ(g.cells.size(), static_cast<size_t>(std::lround(box / (kPi / 6 * 0.006 * 0.006 * 0.006))));
   EXPECT_NEAR(total / box, 1.0, 1e-9);
-  for (size_t m = 0; m < 2; ++m) EXPECT_NEAR(g.mineral_volume[m] / total, s.minerals[m].second, largest / total);
+  for (size_t m = 0; m < 2; ++m)
+    EXPECT_NEAR(g.mineral_volume[m] / total, s.minerals[m].second, largest / total);
   // every face between two grains belongs to exactly two cells, every face on the box to one
   std::vector<int> uses(g.faces.size(), 0);
   for (const auto& c : g.cells)
@@ -197,8 +198,8 @@ TEST(Grains, BoxTessellationFillsTheBoxAndItsMeshKeepsTheMineralVolumes) {
   for (const char* set : {"grain_boundaries", "boundary", "xmin", "xmax", "ymin", "ymax", "zmin", "zmax"})
     EXPECT_EQ(m.node_sets.count(set), 1u) << set;
   const fdem::MeshQuality q = fdem::mesh_quality(m);
-  std::printf("3D grains: %zu, %d tetrahedra, min dihedral %.2f deg, shortest altitude %.3g h\n", g.cells.size(),
-              m.num_elems(), q.min_angle_deg, q.min_size / s.element_size);
+  std::printf("3D grains: %zu, %d tetrahedra, min dihedral %.2f deg, shortest altitude %.3g h\n",
+              g.cells.size(), m.num_elems(), q.min_angle_deg, q.min_size / s.element_size);
   EXPECT_GT(q.min_angle_deg, 3.0);
   EXPECT_GT(q.min_size, 0.05 * s.element_size);
 }
