@@ -6,25 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "common/random.hpp"
 #include "mesh/mesh.hpp"
 
 namespace fdem::grain_detail {
 
-// splitmix64: the same numbers on every platform and standard library.
-class Stream {
- public:
-  explicit Stream(std::uint64_t seed) : s_(seed * 0x2545f4914f6cdd1dULL + 0x632be59bd9b4e019ULL) {}
-  double uniform() {  // in [0, 1)
-    std::uint64_t z = (s_ += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    z ^= z >> 31;
-    return static_cast<double>(z >> 11) * 0x1.0p-53;
-  }
-
- private:
-  std::uint64_t s_;
-};
+using Stream = SplitMixStream;  // src/common/random.hpp
 
 // Seeds in the box [lo, hi] (dim components drawn per try) for which inside() holds, at least half
 // a grain size d apart, as many as `measure` (area or volume) over a circle's (sphere's) of

@@ -8,19 +8,12 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "common/random.hpp"  // splitmix64: a factor depends on (seed, q, draw) only
 #include "kernels/host_loops.hpp"
 
 namespace fdem {
 
 namespace {
-
-// SplitMix64: a counter-based generator, so that a factor depends on (seed, q, draw) only.
-std::uint64_t splitmix64(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
 
 // Uniform in (0, 1) from (seed, q, draw).
 double uniform(std::uint64_t seed, long q, int draw) {

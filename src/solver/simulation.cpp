@@ -187,6 +187,22 @@ void Simulation<D>::sync_platen_nodes() {
   grow_platen_areas<D>(m, contact_->surface().narea, ns, t);
 }
 
+namespace {
+
+// The node update of a step, sampled or not, with or without damping; Ramp: ramped point loads.
+template <int D, bool Ramp>
+NodeSums node_update(const Model<D>& m, const NodeUpdateParams& p, bool sample, bool damp,
+                     const Kokkos::View<NodeSums>& sums, const Kokkos::View<double[3]>& work) {
+  if (sample) return damp ? update_nodes<D, true, true, Ramp>(m, p) : update_nodes<D, true, false, Ramp>(m, p);
+  if (damp)
+    update_nodes_unsampled<D, true, Ramp>(m, p, sums, work);
+  else
+    update_nodes_unsampled<D, false, Ramp>(m, p, sums, work);
+  return NodeSums{};
+}
+
+}  // namespace
+
 template <int D>
 NodeSums Simulation<D>::update_nodes_now(bool sample) {
   prm_.t = t;
@@ -194,23 +210,9 @@ NodeSums Simulation<D>::update_nodes_now(bool sample) {
   prm_.dtv = dtv_next_ > 0 ? dtv_next_ : dt;
   dtv_next_ = 0;
   const bool damp = !skips.damping || prm_.alpha != 0.0 || prm_.cmass != 0.0;
-  if (prm_.load_ramps > 0) {  // ramped point loads
-    if (sample)
-      return damp ? update_nodes<D, true, true, true>(m, prm_) : update_nodes<D, true, false, true>(m, prm_);
-    if (damp)
-      update_nodes_unsampled<D, true, true>(m, prm_, node_sums_, work_dev_);
-    else
-      update_nodes_unsampled<D, false, true>(m, prm_, node_sums_, work_dev_);
-    return NodeSums{};
-  }
-  if (sample)
-    return damp ? update_nodes<D, true, true, false>(m, prm_) : update_nodes<D, true, false, false>(m, prm_);
   // unsampled: the works are summed on the device (work_dev_; book_energies)
-  if (damp)
-    update_nodes_unsampled<D, true, false>(m, prm_, node_sums_, work_dev_);
-  else
-    update_nodes_unsampled<D, false, false>(m, prm_, node_sums_, work_dev_);
-  return NodeSums{};
+  return prm_.load_ramps > 0 ? node_update<D, true>(m, prm_, sample, damp, node_sums_, work_dev_)
+                             : node_update<D, false>(m, prm_, sample, damp, node_sums_, work_dev_);
 }
 
 template <int D>
