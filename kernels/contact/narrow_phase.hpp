@@ -126,7 +126,7 @@ struct PairSubset {
 template <int D, bool Fric, int Cap = kSubsetCap>
 struct ContactForcesFn {
   using Subset = PairSubset<Cap>;
-  Kokkos::View<double* [D]> x, v, xbuild;
+  Kokkos::View<double*[D]> x, v, xbuild;
   ForceScatter<D> scatter;
   Kokkos::View<int*> pts;
   PairList<D> P;
@@ -209,21 +209,28 @@ struct ContactForcesFn {
         }
         w = mine ? 1.0 : 0.0;
       }
+      // a near face of another piece: its fade at the face's edge; a node beyond the edge (most
+      // near faces: the fan of faces around the opposite copy of the node's vertex) with nothing
+      // stored gets no weight and has nothing to update, so it stays out of the subset
+      double phi = fr ? -1.0 : 0.0;
+      if (!fr && near) {
+        face_bary_geo<D>(S.fgeo, S.fslot(fc), wv, N);
+        double score = N[0];
+        for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
+        phi = contact_fade(score, L.tol);
+        if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
+        if (!(phi > 0.0) && !hist) {
+          if (All) none(j, g);
+          continue;
+        }
+      }
       sub.add(j);
       scr.depth(j) = fn > 0.0 ? fn / (L.kn * kmath::sqrt(P.ac(j))) : -1.0;
       scr.g(j) = g;
       scr.w(j) = w;
-      if (fr || !near) {  // a free element's weight, or no weight (only the history to update)
-        scr.phi(j) = fr ? -1.0 : 0.0;
-        continue;
-      }
-      face_bary_geo<D>(S.fgeo, S.fslot(fc), wv, N);
-      double score = N[0];
-      for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
-      double phi = contact_fade(score, L.tol);  // near
-      if (phi > 0.0 && g < 0.0) phi *= facing_fade(node_facing<D>(S, s, n));
-      scr.phi(j) = phi;
-      for (int k = 0; k < D; ++k) scr.n(j, k) = n[k];
+      scr.phi(j) = phi;  // a free element's (-1), no weight (0: only the history to update), or the fade
+      if (phi > 0.0)
+        for (int k = 0; k < D; ++k) scr.n(j, k) = n[k];
     }
   }
 
@@ -282,8 +289,7 @@ struct ContactForcesFn {
     for (int t = 0; t < cnt; ++t) {
       const int j = sub[t];
       const double ge = scr.g(j) - P.g0(j), Aw = Anode * scr.w(j);
-      scr.rel(j) =
-          P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
+      scr.rel(j) = P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
     }
   }
 
