@@ -126,7 +126,7 @@ struct PairSubset {
 template <int D, bool Fric, int Cap = kSubsetCap>
 struct ContactForcesFn {
   using Subset = PairSubset<Cap>;
-  Kokkos::View<double*[D]> x, v, xbuild;
+  Kokkos::View<double* [D]> x, v, xbuild;
   ForceScatter<D> scatter;
   Kokkos::View<int*> pts;
   PairList<D> P;
@@ -289,7 +289,8 @@ struct ContactForcesFn {
     for (int t = 0; t < cnt; ++t) {
       const int j = sub[t];
       const double ge = scr.g(j) - P.g0(j), Aw = Anode * scr.w(j);
-      scr.rel(j) = P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
+      scr.rel(j) =
+          P.fn(j) > 0.0 && Aw < P.ac(j) && ge < 0.0 ? 0.5 * L.kn * (P.ac(j) - Aw) * ge * ge : 0.0;
     }
   }
 
