@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -111,6 +112,36 @@ TEST(Cli, UnstableRunStopsWithExitStatus3) {
   EXPECT_NE(slurp(out + ".log").find("step"), std::string::npos);
   fs::remove_all(out);
   fs::remove(out + ".log");
+}
+
+// Thread binding (src/app/main.cpp): with no OMP_PROC_BIND of the user's, a run that uses every
+// core it may use spreads its threads over them (pinned); a run with fewer threads than cores is
+// not pinned, so that one-thread runs started side by side do not all share core 0. Checked in one
+// process's affinity of a single core (taskset), where one thread is every core, and of all cores.
+TEST(Cli, OneThreadRunsAreNotAllPinnedToTheFirstCore) {
+  const std::string out = tmpdir("binding");
+  fs::create_directories(out);
+  const std::string info = " env -u OMP_PROC_BIND -u OMP_PLACES -u FDEM_NO_REEXEC ";
+  ASSERT_EQ(run(info + "OMP_NUM_THREADS=1 " + FDEM_BINARY + " info > " + out + "/one.txt 2>&1"), 0);
+  const std::string one = slurp(out + "/one.txt");
+  const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+  if (cores > 1) {
+    EXPECT_NE(one.find("OMP_PROC_BIND=false"), std::string::npos) << one;
+  }
+  ASSERT_EQ(run("taskset -c 0" + info + "OMP_NUM_THREADS=1 " + FDEM_BINARY + " info > " + out +
+                "/pinned.txt 2>&1"),
+            0);
+  const std::string pinned = slurp(out + "/pinned.txt");
+  EXPECT_NE(pinned.find("cores available: 1;"), std::string::npos) << pinned;
+  EXPECT_NE(pinned.find("OMP_PROC_BIND=spread OMP_PLACES=threads"), std::string::npos) << pinned;
+  ASSERT_EQ(run(info + "OMP_NUM_THREADS=" + std::to_string(cores) + " " + FDEM_BINARY + " info > " + out +
+                "/all.txt 2>&1"),
+            0);
+  const std::string all = slurp(out + "/all.txt");
+  EXPECT_NE(all.find("OMP_PROC_BIND=spread OMP_PLACES=threads"), std::string::npos) << all;
+  EXPECT_EQ(all.find("OMP_PROC_BIND environment variable not set"), std::string::npos) << all;
+  EXPECT_EQ(one.find("OMP_PROC_BIND environment variable not set"), std::string::npos) << one;
+  fs::remove_all(out);
 }
 
 }  // namespace

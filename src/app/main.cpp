@@ -1,6 +1,7 @@
 // fdem: command line front end. Exit status: 0 ok, 1 unexpected error, 2 bad input, 3 numerical
 // failure (instability, non-finite state), 130 / 143 a run stopped by SIGINT / SIGTERM (128 +
 // the signal's number) after it wrote a checkpoint and summary.json (stop reason "interrupted").
+#include <sched.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -27,6 +28,15 @@ void print_info() {
               KOKKOS_VERSION % 100);
   std::printf("default execution space: %s\n", Kokkos::DefaultExecutionSpace::name());
   std::printf("concurrency: %d\n", static_cast<int>(Kokkos::DefaultExecutionSpace().concurrency()));
+  {
+    cpu_set_t mask;
+    CPU_ZERO(&mask);
+    const int cores = sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
+    const char* bind = std::getenv("OMP_PROC_BIND");
+    const char* places = std::getenv("OMP_PLACES");
+    std::printf("cores available: %d; thread binding: OMP_PROC_BIND=%s OMP_PLACES=%s\n", cores,
+                bind ? bind : "(unset)", places ? places : "(unset)");
+  }
   std::printf("enabled backends:");
 #ifdef KOKKOS_ENABLE_SERIAL
   std::printf(" Serial");
@@ -45,16 +55,38 @@ void print_info() {
   Kokkos::print_configuration(std::cout, false);
 }
 
-// OpenMP reads its binding settings when the program loads: if the user set none, start again
-// once with threads spread over the cores (what Kokkos recommends), else Kokkos warns and threads
-// may migrate.
-void reexec_with_thread_binding(char** argv) {
-  if (!std::getenv("OMP_PROC_BIND") && !std::getenv("FDEM_NO_REEXEC")) {
-    setenv("OMP_PROC_BIND", "spread", 1);
-    setenv("OMP_PLACES", "threads", 1);
-    setenv("FDEM_NO_REEXEC", "1", 1);
-    execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
+// The number of threads this process will run: --kokkos-threads=N / --kokkos-num-threads=N, else
+// the leading number of OMP_NUM_THREADS, else 0 (all the cores it may use).
+int requested_threads(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    for (const char* key : {"--kokkos-threads=", "--kokkos-num-threads="})
+      if (a.rfind(key, 0) == 0) return std::atoi(a.c_str() + std::string(key).size());
   }
+  const char* env = std::getenv("OMP_NUM_THREADS");
+  return env ? std::atoi(env) : 0;
+}
+
+// OpenMP reads its binding settings when the program loads: if the user set none and the run uses
+// every core it may use, start again once with its threads spread over them (what Kokkos
+// recommends), else Kokkos warns and threads may migrate. A run with fewer threads than cores is
+// not pinned (OMP_PROC_BIND=false, which also keeps Kokkos quiet): pinned, its threads would sit on
+// the first cores, and runs started side by side (a parameter study of one-thread runs) would all
+// share core 0.
+void reexec_with_thread_binding(int argc, char** argv) {
+  if (std::getenv("OMP_PROC_BIND") || std::getenv("FDEM_NO_REEXEC")) return;
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  const int cores = sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
+  const int threads = requested_threads(argc, argv);
+  if (threads > 0 && cores > 0 && threads < cores) {
+    setenv("OMP_PROC_BIND", "false", 1);
+    return;
+  }
+  setenv("OMP_PROC_BIND", "spread", 1);
+  setenv("OMP_PLACES", "threads", 1);
+  setenv("FDEM_NO_REEXEC", "1", 1);
+  execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
 }
 
 // The signal that asks a run to stop (0: none). The handler only sets it; the run loop reads it
@@ -178,7 +210,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  reexec_with_thread_binding(argv);
+  reexec_with_thread_binding(argc, argv);
   CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);
