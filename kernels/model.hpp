@@ -16,11 +16,25 @@ struct BCDev {
   double ramp;
 };
 
-// Rigid platen: plane through p0 + vel * t with unit normal n pointing into the body.
+// Rigid platen: plane through p0 + shift(t) with unit normal n pointing into the body; it moves at
+// vel until time tc and at vel2 after it (platens[i].change of the case; tc = +inf without one).
 struct PlatenDev {
   double p0[3], n[3], vel[3];
+  double vel2[3];       // velocity after tc
+  double tc;            // time of the velocity change
   double kn, ks;        // Pa/m, times the node's contact area
   double mu, coh;       // friction coefficient, cohesion (Pa)
+
+  // Displacement of the plane from p0, component k, at time t.
+  KOKKOS_INLINE_FUNCTION double shift(const int k, const double t) const {
+    return t <= tc ? vel[k] * t : vel[k] * tc + vel2[k] * (t - tc);
+  }
+  // Its mean velocity over [t0, t0 + h], h > 0 (vel itself, to the bit, away from tc).
+  KOKKOS_INLINE_FUNCTION double mean_velocity(const int k, const double t0, const double h) const {
+    if (t0 + h <= tc) return vel[k];
+    if (t0 >= tc) return vel2[k];
+    return (vel[k] * (tc - t0) + vel2[k] * (t0 + h - tc)) / h;
+  }
 };
 constexpr int kMaxPlatens = 8;
 struct PlatenSet {

@@ -23,11 +23,11 @@ struct PlatenKernel {
   KOKKOS_INLINE_FUNCTION void contact(const int p, const int i, const double A) const {
     const PlatenDev& P = ps.p[p];
     double g = 0;
-    for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
+    for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + P.shift(k, t))) * P.n[k];
     // relative displacement increment over the last step
     double du[D], dun = 0;
     for (int k = 0; k < D; ++k) {
-      du[k] = (v(i, k) - P.vel[k]) * dt;
+      du[k] = (v(i, k) - P.mean_velocity(k, t - dt, dt)) * dt;
       dun += du[k] * P.n[k];
     }
     // The shear spring follows the Coulomb law shared with contact (kernels/friction.hpp); a
@@ -61,7 +61,7 @@ struct PlatenKernel {
       fs(p, i, k) = Fs[k];
       f(i, k) += Fk;
       Kokkos::atomic_add(&acc(p, kPlatenForce + k), Fk);
-      work += Fk * P.vel[k] * dt;
+      work += Fk * P.mean_velocity(k, t - 0.5 * dt, dt) * dt;  // centred on x(t)
     }
     Kokkos::atomic_add(&acc(p, kPlatenWork), work);
     Kokkos::atomic_add(&acc(p, kPlatenContacts), 1.0);
@@ -111,7 +111,7 @@ double platen_energy(const Model<D>& m, double t) {
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
-            g += (x(i, k) - (P.p0[k] + P.vel[k] * t)) * P.n[k];
+            g += (x(i, k) - (P.p0[k] + P.shift(k, t))) * P.n[k];
             f2 += fs(p, i, k) * fs(p, i, k);
           }
           g -= g0(p, i);
@@ -149,7 +149,7 @@ void grow_platen_areas(const Model<D>& m, const Kokkos::View<double*>& narea, in
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
-            g += (x(i, k) - (P.p0[k] + P.vel[k] * tn)) * P.n[k];
+            g += (x(i, k) - (P.p0[k] + P.shift(k, tn))) * P.n[k];
             f2 += fs(p, i, k) * fs(p, i, k);
           }
           const double ge = g - g0(p, i);

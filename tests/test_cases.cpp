@@ -187,25 +187,7 @@ TEST(CaseGraniteBrazilian, ReducedRunSplitsAlongTheDiameterMostlyBetweenGrains) 
 
 namespace {
 
-// history.csv as columns by name.
-std::map<std::string, std::vector<double>> read_history(const std::string& path) {
-  std::ifstream f(path);
-  std::string line;
-  std::getline(f, line);
-  std::vector<std::string> names;
-  {
-    std::stringstream ss(line);
-    std::string x;
-    while (std::getline(ss, x, ',')) names.push_back(x);
-  }
-  std::map<std::string, std::vector<double>> cols;
-  while (std::getline(f, line)) {
-    std::stringstream ss(line);
-    std::string x;
-    for (size_t k = 0; k < names.size() && std::getline(ss, x, ','); ++k) cols[names[k]].push_back(std::stod(x));
-  }
-  return cols;
-}
+using fdem::test::read_history;
 
 // Slope at 2 m elements (1290 elements, 114 interfaces), settled to 0.3 s, the strength
 // reduction factor rising by 1 per second from 0.5 to 2.5 (twice the case's rate):

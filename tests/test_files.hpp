@@ -7,8 +7,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace fdem::test {
 
@@ -33,6 +35,27 @@ inline int system_status(const std::string& cmd) {
   const int rc = std::system(cmd.c_str());
   if (WIFEXITED(rc)) return WEXITSTATUS(rc);
   return WIFSIGNALED(rc) ? 128 + WTERMSIG(rc) : -1;
+}
+
+// history.csv as columns by name.
+inline std::map<std::string, std::vector<double>> read_history(const std::string& path) {
+  std::ifstream f(path);
+  std::string line;
+  std::getline(f, line);
+  std::vector<std::string> names;
+  {
+    std::stringstream ss(line);
+    std::string x;
+    while (std::getline(ss, x, ',')) names.push_back(x);
+  }
+  std::map<std::string, std::vector<double>> cols;
+  while (std::getline(f, line)) {
+    std::stringstream ss(line);
+    std::string x;
+    for (size_t k = 0; k < names.size() && std::getline(ss, x, ','); ++k)
+      cols[names[k]].push_back(std::stod(x));
+  }
+  return cols;
 }
 
 }  // namespace fdem::test

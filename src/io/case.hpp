@@ -80,6 +80,9 @@ struct PlatenSpec {
   Vec3 point{0, 0, 0};     // a point of the plane at t = 0
   Vec3 normal{0, 0, 0};    // unit normal pointing into the body side
   Vec3 velocity{0, 0, 0};  // prescribed velocity of the plane
+  bool has_change = false;        // "change": from change_time on it moves at change_velocity
+  double change_time = 0;         // s
+  Vec3 change_velocity{0, 0, 0};  // m/s
   double kn = 0, ks = 0;   // Pa/m (per unit contact area); 0: derive (resolve_defaults)
   double friction = 0;     // Coulomb coefficient
   double cohesion = 0;     // Pa

@@ -111,7 +111,7 @@ void read_platens(json& doc, Case& c, const Reader& R) {
   json& pl = R.array(doc, "", "platens", false);
   for (size_t i = 0; i < pl.size(); ++i) {
     const std::string p = child("platens", i);
-    R.keys(pl[i], p, {"name", "point", "normal", "velocity", "kn", "ks", "friction", "cohesion"});
+    R.keys(pl[i], p, {"name", "point", "normal", "velocity", "change", "kn", "ks", "friction", "cohesion"});
     PlatenSpec s;
     s.name = R.name(pl[i], p, "name");
     for (const auto& o : c.platens)
@@ -124,6 +124,14 @@ void read_platens(json& doc, Case& c, const Reader& R) {
     for (auto& x : n) x /= len;
     s.normal = n;
     s.velocity = R.vec(pl[i], p, "velocity", d, Vec3{0, 0, 0});
+    if (pl[i].contains("change")) {  // one change of velocity (e.g. fast approach, slow loading)
+      json& ch = R.object(pl[i], p, "change", false);
+      const std::string cp = child(p, "change");
+      R.keys(ch, cp, {"time", "velocity"});
+      s.has_change = true;
+      s.change_time = R.number(ch, cp, "time", ge(0));
+      s.change_velocity = R.vec(ch, cp, "velocity", d);
+    }
     s.kn = R.number(pl[i], p, "kn", ge(0), 0.0);
     s.ks = R.number(pl[i], p, "ks", ge(0), 0.0);
     s.friction = R.number(pl[i], p, "friction", ge(0), 0.0);

@@ -80,7 +80,9 @@ double build_platens(const Case& c, const HostMesh& /*mesh*/, const std::vector<
       P.p0[k] = ps.point[k];
       P.n[k] = ps.normal[k] / nlen;
       P.vel[k] = ps.velocity[k];
+      P.vel2[k] = ps.has_change ? ps.change_velocity[k] : ps.velocity[k];
     }
+    P.tc = ps.has_change ? ps.change_time : std::numeric_limits<double>::infinity();
     P.kn = ps.kn;  // derived values filled by resolve_defaults (io/case.hpp)
     P.ks = ps.ks;
     P.mu = ps.friction;

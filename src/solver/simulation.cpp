@@ -107,13 +107,14 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
   if (!sample) return;  // this step's works are in work_dev_
   pull_works();
   {
-    // Works done by time t: everything before this step plus half of this step's increment
-    // (the increments are centred on x(n)).
+    // Works done by time t: everything before this step plus the part of this step's increment
+    // (centred on x(n): over [t - dt/2, t + dt/2]) up to t.
     Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
     double wp = 0;
     for (int p = 0; p < m.platens.count; ++p) {
       double inc = 0;
-      for (int k = 0; k < 3; ++k) inc += platen_acc_host_(p, kPlatenForce + k) * m.platens.p[p].vel[k] * dt;
+      for (int k = 0; k < 3; ++k)
+        inc += platen_acc_host_(p, kPlatenForce + k) * m.platens.p[p].mean_velocity(k, t, 0.5 * dt) * dt;
       wp += platen_acc_host_(p, kPlatenWork) - 0.5 * inc;
       e.friction += platen_acc_host_(p, kPlatenFriction);
     }
@@ -308,7 +309,9 @@ std::vector<std::array<double, 3>> Simulation<D>::platen_forces() const {
 template <int D>
 double Simulation<D>::platen_displacement(int p, double at) const {
   const auto& P = m.platens.p[p];
-  return std::sqrt(P.vel[0] * P.vel[0] + P.vel[1] * P.vel[1] + P.vel[2] * P.vel[2]) * at;
+  double s2 = 0;
+  for (int k = 0; k < 3; ++k) s2 += P.shift(k, at) * P.shift(k, at);
+  return std::sqrt(s2);
 }
 
 template <int D>
