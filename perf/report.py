@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 GROWTH_LIMIT = 1.3
 YARDSTICK_LIMIT = 1.6  # issue 19: the intact full step at most 1.6 times the yardstick (perf/yardstick.hpp)
 BANDWIDTH_TARGET = 0.30
-CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.1}  # cases/brazilian_disc/case.json
+CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.025}  # cases/brazilian_disc/case.json
 
 
 def load(path):
@@ -577,7 +577,9 @@ class Report:
                f"OMP_NUM_THREADS = {runs[0]['threads'] if runs else '?'}; error of `results.tensile_strength_Pa` "
                f"against the input f_t = {ft / 1e6:g} MPa; wall time from summary.json (set-up, run and output). "
                "One mesh does not decide the strength (issue 23): each point is the mean over the meshes of "
-               "element sizes spread around D (`--realisations`), its error bar their standard deviation.")
+               "element sizes spread around D (`--realisations`), its error bar their standard deviation. "
+               "V is the loading rate of each platen after its approach (the case: 0.1 m/s for the first 0.22 mm, "
+               "V after it; at V = 0.1 m/s one speed throughout).")
         every = d["runs"] + d.get("left_out", [])
         sizes = sorted({r.get("nominal_size_m", r["element_size_m"]) for r in every}, reverse=True)
         rates = sorted({r["rate_m_per_s"] for r in every}, reverse=True)

@@ -13,14 +13,21 @@ standard deviation as error bars.
 
 Pairs whose estimated cost (0.005 / d)^3 * (0.05 / v), relative to d = 5 mm at 0.05 m/s, exceeds
 --max-cost are left out (listed in the output). Writes DIR/brazil.json (one record per run) and
-keeps each run's outputs in DIR/runs/d<D>_v<V>[_r<K>]/. Threads: OMP_NUM_THREADS of the environment.
+keeps each run's outputs in DIR/runs/d<D>_v<V>[_r<K>]/. Threads: OMP_NUM_THREADS of the environment
+(1 for a study); --jobs runs that many at once (one-thread runs are not pinned, so each gets a core of
+its own: src/app/main.cpp).
+
+With the case as shipped, V is the loading rate after the platens' fast approach (parameters.approach
+at parameters.approach_rate = 0.1 m/s; at V = 0.1 m/s there is no change of speed).
 """
 import argparse
 import json
 import os
 import subprocess
 import sys
+import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 
 def main():
@@ -34,6 +41,7 @@ def main():
     ap.add_argument("--ft", type=float, default=8e6, help="input tensile strength (Pa)")
     ap.add_argument("--realisations", type=int, default=1, help="meshes per pair (sizes spread around D)")
     ap.add_argument("--spread", type=float, default=0.05, help="relative spread of the realisations' sizes")
+    ap.add_argument("--jobs", type=int, default=1, help="runs at once")
     a = ap.parse_args()
     n = max(1, a.realisations)
     sizes = [float(s) for s in a.sizes.split(",") if s]
@@ -49,7 +57,11 @@ def main():
                 print(f"brazil: d = {d0} m, rate = {v} m/s left out (cost {cost:.1f} > {a.max_cost})", flush=True)
             else:
                 plan += [(d0, v, k, cost) for k in range(n)]
-    for d0, v, k, cost in plan:
+    lock = threading.Lock()
+    done = [None] * len(plan)
+
+    def run_one(i):
+        d0, v, k, cost = plan[i]
         d = d0 * (1.0 + a.spread * (2.0 * k / (n - 1) - 1.0)) if n > 1 else d0
         out = os.path.join(a.out, "runs", f"d{d0:g}_v{v:g}" + (f"_r{k}" if n > 1 else ""))
         cmd = [a.fdem, "run", a.case, "--out", out, "--quiet",
@@ -83,9 +95,14 @@ def main():
             print(f"brazil: d = {d:g} m, rate = {v:g} m/s: {rec['elements']} elements, {rec['steps']} steps, "
                   f"sigma_t = {st / 1e6:.3f} MPa ({100 * rec['error']:+.2f} %), wall {rec['wall_seconds']:.1f} s",
                   flush=True)
-        records.append(rec)
-        with open(os.path.join(a.out, "brazil.json"), "w") as f:
-            json.dump({"ft_Pa": a.ft, "case": a.case, "runs": records, "left_out": skipped}, f, indent=1)
+        with lock:
+            done[i] = rec
+            records[:] = [r for r in done if r is not None]
+            with open(os.path.join(a.out, "brazil.json"), "w") as f:
+                json.dump({"ft_Pa": a.ft, "case": a.case, "runs": records, "left_out": skipped}, f, indent=1)
+
+    with ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
+        list(ex.map(run_one, range(len(plan))))
     with open(os.path.join(a.out, "brazil.json"), "w") as f:
         json.dump({"ft_Pa": a.ft, "case": a.case, "runs": records, "left_out": skipped}, f, indent=1)
     return 0 if all(r["exit_status"] == 0 for r in records) else 1

@@ -169,8 +169,9 @@ TEST(CaseExamples, BrazilianDiscHasThePapersParameters) {
 }
 
 // The case's default (issue 23): the paper's disc and parameters, its loaded diameter meshed as
-// element edges, padded platens (normal stiffness 1e12 Pa/m per area), 0.1 m/s per platen, closure
-// 1.6 mm, stop at a drop of 30 % from the peak.
+// element edges, padded platens (normal stiffness 1e12 Pa/m per area), each platen at 0.1 m/s for
+// its first 0.26 mm (about 60 % of the peak load) and at 0.0125 m/s after it, local damping 0.1,
+// closure 1.6 mm, stop at a drop of 30 % from the peak.
 TEST(CaseExamples, BrazilianDiscDefaultHasTheDiameterAndPaddedPlatens) {
   Case c = fdem::load_case(kDisc);
   EXPECT_EQ(c.name, "brazilian_disc");
@@ -180,7 +181,15 @@ TEST(CaseExamples, BrazilianDiscDefaultHasTheDiameterAndPaddedPlatens) {
   ASSERT_EQ(c.platens.size(), 2u);
   for (const auto& p : c.platens) EXPECT_DOUBLE_EQ(p.kn, 1e12);
   EXPECT_DOUBLE_EQ(c.platens[0].velocity[1], -0.1);
-  EXPECT_NEAR(c.end_time, 8e-3, 1e-15);
+  EXPECT_DOUBLE_EQ(c.platens[1].velocity[1], 0.1);
+  for (const auto& p : c.platens) {
+    EXPECT_TRUE(p.has_change);
+    EXPECT_NEAR(p.change_time, 2.6e-3, 1e-15);
+    EXPECT_DOUBLE_EQ(std::fabs(p.change_velocity[1]), 0.0125);
+    EXPECT_GT(p.change_velocity[1] * p.velocity[1], 0.0);  // same direction
+  }
+  EXPECT_DOUBLE_EQ(c.local_damping, 0.1);
+  EXPECT_NEAR(c.end_time, 2.6e-3 + (0.8e-3 - 0.26e-3) / 0.0125, 1e-12);
   EXPECT_DOUBLE_EQ(c.stop_drop_fraction, 0.3);
   EXPECT_DOUBLE_EQ(c.interface_materials.at(0).ft, 8e6);
 }
