@@ -26,7 +26,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 GROWTH_LIMIT = 1.3
 YARDSTICK_LIMIT = 1.6  # issue 19: the intact full step at most 1.6 times the yardstick (perf/yardstick.hpp)
 BANDWIDTH_TARGET = 0.30
-CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.025}  # cases/brazilian_disc/case.json
+CASE_DEFAULT = {"element_size_m": 0.003, "rate_m_per_s": 0.0125}  # cases/brazilian_disc/case.json
 
 
 def load(path):
