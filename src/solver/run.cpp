@@ -35,38 +35,6 @@ std::vector<std::string> region_sets_used(const Case& c) {
   return out;
 }
 
-// Mesh of a case, ready for the solver: built or read, checked, renumbered, interfaces inserted.
-// Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
-HostMesh prepare_mesh(const Case& c) {
-  using setup_times::Phase;
-  Phase build("mesh");
-  HostMesh mesh = build_mesh(c.mesh, c.dim);
-  build.stop();
-  Phase checks("mesh_checks");
-  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
-  check_elements(mesh, source);
-  check_case_against_mesh(c, mesh);
-  const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
-  mesh.warnings = bodies.warnings;
-  mesh.bodies = bodies.bodies;
-  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
-  checks.stop();
-  Phase reorder("renumbering");
-  reorder_for_locality(mesh);
-  reorder.stop();
-  if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
-    Phase insert("interface_insertion");
-    std::vector<bool> frac(mesh.region_names.size(), false);
-    for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
-    std::vector<std::string> cut;
-    for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
-    insert_interfaces(mesh, frac, cut);
-  }
-  add_region_node_sets(mesh, region_sets_used(c));
-  // the exact count (a .msh file's is known only now), before the model is allocated
-  check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
-  return mesh;
-}
 
 // The resolved case without the keys that do not change the results: the checkpoint interval,
 // and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken
@@ -110,6 +78,38 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 }
 
 }  // namespace
+
+// run.hpp. Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
+HostMesh prepare_mesh(const Case& c) {
+  using setup_times::Phase;
+  Phase build("mesh");
+  HostMesh mesh = build_mesh(c.mesh, c.dim);
+  build.stop();
+  Phase checks("mesh_checks");
+  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
+  check_elements(mesh, source);
+  check_case_against_mesh(c, mesh);
+  const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
+  mesh.warnings = bodies.warnings;
+  mesh.bodies = bodies.bodies;
+  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+  checks.stop();
+  Phase reorder("renumbering");
+  reorder_for_locality(mesh);
+  reorder.stop();
+  if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
+    Phase insert("interface_insertion");
+    std::vector<bool> frac(mesh.region_names.size(), false);
+    for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
+    std::vector<std::string> cut;
+    for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
+    insert_interfaces(mesh, frac, cut);
+  }
+  add_region_node_sets(mesh, region_sets_used(c));
+  // the exact count (a .msh file's is known only now), before the model is allocated
+  check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
+  return mesh;
+}
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   setup_times::reset();
