@@ -126,7 +126,7 @@ struct CliOptions {
   bool moduli = false;
   double checkpoint_every = -1;
   std::string restart;
-  int parts = 0;                  // partition
+  int parts = 0;                 // partition
   std::string method = "metis";  // partition
 };
 
@@ -169,8 +169,9 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
                   "also the effective elastic moduli of the mesh with its interfaces (a static solve; "
                   "docs/case-format.md)");
 
-  auto* part = app.add_subcommand("partition", "partition a case's elements into parts (docs/parallel.md): "
-                                                 "statistics, OUT/partition.json and OUT/partition.vtk");
+  auto* part = app.add_subcommand("partition",
+                                  "partition a case's elements into parts (docs/parallel.md): "
+                                  "statistics, OUT/partition.json and OUT/partition.vtk");
   part->add_option("case", o.case_path, "case file (JSON)")->required();
   part->add_option("--parts", o.parts, "number of parts, in [1, number of elements]")->required();
   part->add_option("--method", o.method, "metis (default), rcb or block");
@@ -187,7 +188,8 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       print_info();
     } else if (app.got_subcommand("check")) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
-      std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
+      std::cout << report.dump(2) << "\n"
+                << "case OK: " << o.case_path << "\n";
     } else if (app.got_subcommand("partition")) {
       const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir);
       std::cout << fdem::partition_report_text(r) << "wrote " << r["files"][0].get<std::string>() << ", "
@@ -208,8 +210,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
   } catch (const fdem::InputError& e) {
     // Name the case file in every message (mesh generator errors, for one, do not).
     std::string msg = e.what();
-    if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos)
-      msg = o.case_path + ": " + msg;
+    if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos) msg = o.case_path + ": " + msg;
     std::cerr << "error: " << msg << "\n";
     return 2;
   } catch (const fdem::NumericalError& e) {

@@ -46,12 +46,12 @@ struct PartitionStats {
   int parts = 0;
   long elements = 0, interfaces = 0, shared_faces = 0;
   std::vector<long> elements_per_part, load_per_part, ghosts_per_part;
-  double imbalance = 0;           // max / mean - 1 of load_per_part (elements + side-A interfaces)
-  double element_imbalance = 0;   // max / mean - 1 of elements_per_part
-  long interfaces_cut = 0;        // interfaces whose two elements lie in different parts
-  long shared_faces_cut = 0;      // continuous faces (shared nodes) between different parts
-  long ghosts = 0;                // sum of ghosts_per_part
-  double seconds = 0;             // wall time of the partition (set by the caller)
+  double imbalance = 0;          // max / mean - 1 of load_per_part (elements + side-A interfaces)
+  double element_imbalance = 0;  // max / mean - 1 of elements_per_part
+  long interfaces_cut = 0;       // interfaces whose two elements lie in different parts
+  long shared_faces_cut = 0;     // continuous faces (shared nodes) between different parts
+  long ghosts = 0;               // sum of ghosts_per_part
+  double seconds = 0;            // wall time of the partition (set by the caller)
 };
 // Ghost elements of part p: elements of other parts that share an interface or a face with p.
 PartitionStats partition_stats(const HostMesh& mesh, const std::vector<int>& part, int parts);

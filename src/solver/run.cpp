@@ -35,7 +35,6 @@ std::vector<std::string> region_sets_used(const Case& c) {
   return out;
 }
 
-
 // The resolved case without the keys that do not change the results: the checkpoint interval,
 // and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken
 // of the case as read, before resolve_defaults (checkpoints of earlier versions store this hash).
@@ -71,8 +70,9 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
   cmp("interfaces", h.interfaces, mesh.num_ifaces());
   if (diff.empty() && h.mesh_hash != id.mesh_hash) diff = "the mesh coordinates or connectivity differ";
   if (diff.empty() && h.case_hash != id.case_hash)
-    diff = "the case differs (give the same case file and the same --set options as the run that "
-           "wrote it; only the checkpoint interval may change)";
+    diff =
+        "the case differs (give the same case file and the same --set options as the run that "
+        "wrote it; only the checkpoint interval may change)";
   if (!diff.empty())
     throw InputError("restart file '" + file + "' is a checkpoint of another case or mesh: " + diff);
 }
@@ -142,7 +142,8 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
                     : run_dim<3>(c, std::move(mesh), out, opt, id, r);
 }
 
-nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides, bool moduli) {
+nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides,
+                          bool moduli) {
   Case c = load_case(case_path, overrides);
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
@@ -160,8 +161,10 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
     report["time_step"] = stable_report(sim);
     report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);  // at the starting step
   };
-  if (c.dim == 2) add_dt(Simulation<2>(c, mesh));
-  else add_dt(Simulation<3>(c, mesh));
+  if (c.dim == 2)
+    add_dt(Simulation<2>(c, mesh));
+  else
+    add_dt(Simulation<3>(c, mesh));
   if (moduli) report["effective_moduli"] = effective_moduli_report(c, effective_moduli(c, mesh));
   return report;
 }
