@@ -188,8 +188,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       print_info();
     } else if (app.got_subcommand("check")) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
-      std::cout << report.dump(2) << "\n"
-                << "case OK: " << o.case_path << "\n";
+      std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
     } else if (app.got_subcommand("partition")) {
       const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir);
       std::cout << fdem::partition_report_text(r) << "wrote " << r["files"][0].get<std::string>() << ", "
@@ -210,7 +209,8 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
   } catch (const fdem::InputError& e) {
     // Name the case file in every message (mesh generator errors, for one, do not).
     std::string msg = e.what();
-    if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos) msg = o.case_path + ": " + msg;
+    if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos)
+      msg = o.case_path + ": " + msg;
     std::cerr << "error: " << msg << "\n";
     return 2;
   } catch (const fdem::NumericalError& e) {

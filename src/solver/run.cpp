@@ -35,6 +35,43 @@ std::vector<std::string> region_sets_used(const Case& c) {
   return out;
 }
 
+}  // namespace
+
+// Mesh of a case, ready for the solver (run.hpp). Each part is a set-up phase
+// (common/setup_times.hpp; Gmsh's own inside "mesh").
+HostMesh prepare_mesh(const Case& c) {
+  using setup_times::Phase;
+  Phase build("mesh");
+  HostMesh mesh = build_mesh(c.mesh, c.dim);
+  build.stop();
+  Phase checks("mesh_checks");
+  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
+  check_elements(mesh, source);
+  check_case_against_mesh(c, mesh);
+  const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
+  mesh.warnings = bodies.warnings;
+  mesh.bodies = bodies.bodies;
+  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+  checks.stop();
+  Phase reorder("renumbering");
+  reorder_for_locality(mesh);
+  reorder.stop();
+  if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
+    Phase insert("interface_insertion");
+    std::vector<bool> frac(mesh.region_names.size(), false);
+    for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
+    std::vector<std::string> cut;
+    for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
+    insert_interfaces(mesh, frac, cut);
+  }
+  add_region_node_sets(mesh, region_sets_used(c));
+  // the exact count (a .msh file's is known only now), before the model is allocated
+  check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
+  return mesh;
+}
+
+namespace {
+
 // The resolved case without the keys that do not change the results: the checkpoint interval,
 // and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken
 // of the case as read, before resolve_defaults (checkpoints of earlier versions store this hash).
@@ -70,46 +107,13 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
   cmp("interfaces", h.interfaces, mesh.num_ifaces());
   if (diff.empty() && h.mesh_hash != id.mesh_hash) diff = "the mesh coordinates or connectivity differ";
   if (diff.empty() && h.case_hash != id.case_hash)
-    diff =
-        "the case differs (give the same case file and the same --set options as the run that "
-        "wrote it; only the checkpoint interval may change)";
+    diff = "the case differs (give the same case file and the same --set options as the run that "
+           "wrote it; only the checkpoint interval may change)";
   if (!diff.empty())
     throw InputError("restart file '" + file + "' is a checkpoint of another case or mesh: " + diff);
 }
 
 }  // namespace
-
-// run.hpp. Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
-HostMesh prepare_mesh(const Case& c) {
-  using setup_times::Phase;
-  Phase build("mesh");
-  HostMesh mesh = build_mesh(c.mesh, c.dim);
-  build.stop();
-  Phase checks("mesh_checks");
-  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
-  check_elements(mesh, source);
-  check_case_against_mesh(c, mesh);
-  const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
-  mesh.warnings = bodies.warnings;
-  mesh.bodies = bodies.bodies;
-  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
-  checks.stop();
-  Phase reorder("renumbering");
-  reorder_for_locality(mesh);
-  reorder.stop();
-  if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
-    Phase insert("interface_insertion");
-    std::vector<bool> frac(mesh.region_names.size(), false);
-    for (const auto& r : c.fracturable_regions) frac[mesh.region_index(r)] = true;
-    std::vector<std::string> cut;
-    for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
-    insert_interfaces(mesh, frac, cut);
-  }
-  add_region_node_sets(mesh, region_sets_used(c));
-  // the exact count (a .msh file's is known only now), before the model is allocated
-  check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
-  return mesh;
-}
 
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   setup_times::reset();
@@ -142,8 +146,7 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
                     : run_dim<3>(c, std::move(mesh), out, opt, id, r);
 }
 
-nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides,
-                          bool moduli) {
+nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides, bool moduli) {
   Case c = load_case(case_path, overrides);
   const HostMesh mesh = prepare_mesh(c);
   resolve_defaults(c, mesh);
@@ -161,10 +164,8 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
     report["time_step"] = stable_report(sim);
     report["steps_to_end_time"] = std::ceil(c.end_time / sim.dt);  // at the starting step
   };
-  if (c.dim == 2)
-    add_dt(Simulation<2>(c, mesh));
-  else
-    add_dt(Simulation<3>(c, mesh));
+  if (c.dim == 2) add_dt(Simulation<2>(c, mesh));
+  else add_dt(Simulation<3>(c, mesh));
   if (moduli) report["effective_moduli"] = effective_moduli_report(c, effective_moduli(c, mesh));
   return report;
 }

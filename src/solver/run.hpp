@@ -12,11 +12,11 @@ struct Case;
 struct HostMesh;
 
 struct RunOptions {
-  std::string out_dir;                 // default: ./out/<case name>
+  std::string out_dir;                // default: ./out/<case name>
   std::vector<std::string> overrides;  // --set key.path=value
-  bool progress = true;                // progress line on a terminal / periodic lines in logs
-  double checkpoint_every = -1;        // s of simulated time; < 0: the case's output.checkpoint_every
-  std::string restart;                 // checkpoint to go on from (same case and --set options)
+  bool progress = true;               // progress line on a terminal / periodic lines in logs
+  double checkpoint_every = -1;       // s of simulated time; < 0: the case's output.checkpoint_every
+  std::string restart;                // checkpoint to go on from (same case and --set options)
   // Set (to the signal's number) by a signal handler to stop the run: the loop reads it once per
   // step on the host; the run then ends after the step with a checkpoint and summary.json (stop
   // reason "interrupted", "signal" the number). Null: not watched.
