@@ -18,6 +18,9 @@
 #ifdef FDEM_HAVE_METIS
 #include <metis.h>
 #endif
+#ifdef FDEM_HAVE_ZOLTAN
+#include "parallel/partition_zoltan.hpp"
+#endif
 
 namespace fdem {
 
@@ -25,6 +28,9 @@ namespace {
 const char* const kNoMetis =
     "--method metis: this fdem was built without METIS (install libmetis-dev and configure again; "
     "allowed here: rcb, block)";
+const char* const kNoZoltan =
+    ": this fdem was built without Zoltan (configure with -DFDEM_ENABLE_MPI=ON, docs/parallel.md; "
+    "allowed here: metis, rcb, block)";
 }  // namespace
 
 PartitionMethod parse_partition_method(const std::string& name) {
@@ -34,7 +40,13 @@ PartitionMethod parse_partition_method(const std::string& name) {
   }
   if (name == "rcb") return PartitionMethod::Rcb;
   if (name == "block") return PartitionMethod::Block;
-  throw InputError("--method '" + name + "' is not a partition method (allowed: metis, rcb, block)");
+  for (auto m : {PartitionMethod::ZoltanRcb, PartitionMethod::ZoltanRib, PartitionMethod::ZoltanHsfc})
+    if (name == partition_method_name(m)) {
+      if (!partition_has_zoltan()) throw InputError("--method " + name + kNoZoltan);
+      return m;
+    }
+  throw InputError("--method '" + name + "' is not a partition method (allowed: metis, rcb, block; " +
+                   "zoltan-rcb, zoltan-rib, zoltan-hsfc in a build with -DFDEM_ENABLE_MPI=ON)");
 }
 
 const char* partition_method_name(PartitionMethod m) {
@@ -45,12 +57,26 @@ const char* partition_method_name(PartitionMethod m) {
       return "rcb";
     case PartitionMethod::Block:
       return "block";
+    case PartitionMethod::ZoltanRcb:
+      return "zoltan-rcb";
+    case PartitionMethod::ZoltanRib:
+      return "zoltan-rib";
+    case PartitionMethod::ZoltanHsfc:
+      return "zoltan-hsfc";
   }
   return "?";
 }
 
 bool partition_has_metis() {
 #ifdef FDEM_HAVE_METIS
+  return true;
+#else
+  return false;
+#endif
+}
+
+bool partition_has_zoltan() {
+#ifdef FDEM_HAVE_ZOLTAN
   return true;
 #else
   return false;
@@ -181,6 +207,16 @@ ElementGraph element_graph(const HostMesh& m) {
   return g;
 }
 
+void partition_init(PartitionMethod method) {
+#ifdef FDEM_HAVE_ZOLTAN
+  if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
+      method == PartitionMethod::ZoltanHsfc)
+    zoltan_init();
+#else
+  (void)method;
+#endif
+}
+
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method) {
   const int ne = mesh.num_elems();
   if (parts < 1 || parts > ne)
@@ -216,7 +252,19 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
       const int a = mesh.iface_elems[2 * static_cast<size_t>(i)];
       if (a >= 0 && a < ne) ++w[a];
     }
-    if (method == PartitionMethod::Rcb) {
+    if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
+        method == PartitionMethod::ZoltanHsfc) {
+#ifdef FDEM_HAVE_ZOLTAN
+      const auto c = centroids(mesh);
+      std::vector<double> xyz(static_cast<size_t>(ne) * mesh.dim);
+      for (int e = 0; e < ne; ++e)
+        for (int d = 0; d < mesh.dim; ++d) xyz[static_cast<size_t>(e) * mesh.dim + d] = c[e][d];
+      const char* lb = method == PartitionMethod::ZoltanRcb ? "RCB" : method == PartitionMethod::ZoltanRib ? "RIB" : "HSFC";
+      part = zoltan_partition(mesh.dim, xyz, std::vector<float>(w.begin(), w.end()), parts, lb);
+#else
+      throw InputError(std::string("--method ") + partition_method_name(method) + kNoZoltan);
+#endif
+    } else if (method == PartitionMethod::Rcb) {
       std::vector<int> ids(ne);
       std::iota(ids.begin(), ids.end(), 0);
       rcb(centroids(mesh), w, mesh.dim, ids.data(), ids.data() + ne, 0, parts, part);

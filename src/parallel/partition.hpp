@@ -17,14 +17,20 @@ enum class PartitionMethod {
   Metis,  // METIS_PartGraphKway on the element graph (edges: interfaces and shared faces)
   Rcb,    // recursive coordinate bisection of the element centroids (a plain baseline, home-made)
   Block,  // contiguous ranges of element indices: Morton order after reorder_for_locality
+  // Zoltan's geometric partitioners of the element centroids (builds with -DFDEM_ENABLE_MPI=ON only):
+  ZoltanRcb,   // recursive coordinate bisection
+  ZoltanRib,   // recursive inertial bisection
+  ZoltanHsfc,  // Hilbert space-filling curve
 };
 
-// "metis", "rcb", "block"; anything else, or metis in a build without METIS: InputError naming
-// --method and the allowed names.
+// "metis", "rcb", "block", "zoltan-rcb", "zoltan-rib", "zoltan-hsfc"; anything else, or a method
+// this build lacks (METIS not found; Zoltan without FDEM_ENABLE_MPI): InputError naming --method
+// and the allowed names.
 PartitionMethod parse_partition_method(const std::string& name);
 const char* partition_method_name(PartitionMethod m);
-// Whether this build links METIS (CMake found it); without it method metis throws InputError.
+// Whether this build links METIS (CMake found it) and Zoltan (FDEM_ENABLE_MPI).
 bool partition_has_metis();
+bool partition_has_zoltan();
 
 // The element graph in compressed rows: xadj[e]..xadj[e+1] index adj (neighbour elements) and
 // kind (0: an interface joins them, 1: a continuous face: they share its nodes). Each edge
@@ -41,6 +47,9 @@ ElementGraph element_graph(const HostMesh& mesh);
 // (naming --parts and the allowed range) and for metis in a build without METIS.
 // Deterministic: the same mesh and arguments give the same result.
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method);
+// Starts what the method needs once per process (MPI and Zoltan for the zoltan methods; nothing
+// for the others), so that the partition's time excludes it. partition_elements calls it too.
+void partition_init(PartitionMethod method);
 
 struct PartitionStats {
   int parts = 0;

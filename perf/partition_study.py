@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""Element partitions of the shipped meshes: which partitioner (issue 20, docs/parallel.md).
+
+For each mesh (a case with --set options), method and part count N, runs
+
+    fdem partition CASE --parts N --method M [--set ...] --out TMP
+
+and keeps from TMP/partition.json: elements, interfaces, interfaces cut (each cut interface needs a
+ghost element and an exchange per step: the exchange volume), ghost elements, load imbalance
+(max/mean - 1 of elements + side-A interfaces) and the partition's wall time (the partitioner
+alone, not the mesh). Every run meshes anew (Gmsh, deterministic); one thread.
+
+    perf/partition_study.py [--fdem build/openmp/fdem] [--parts 2,4,8,16,64] \
+        [--methods metis,rcb,block] [--out perf/results/partition.json] [--quick]
+
+Methods: metis (METIS k-way on the interface graph), rcb and block (plain baselines written here:
+coordinate bisection; contiguous ranges of the Morton-ordered elements); zoltan-rcb, zoltan-rib,
+zoltan-hsfc where fdem was configured with -DFDEM_ENABLE_MPI=ON (a method the build lacks is
+skipped with a note). --quick: the two coarse meshes only.
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+MESHES = [
+    ("brazilian_disc", "cases/brazilian_disc/case.json", []),
+    ("impact_3d_h3mm", "cases/particle_impact_3d/case.json", []),
+    ("impact_3d_h1.5mm", "cases/particle_impact_3d/case.json", ["parameters.h=0.0015"]),
+]
+
+
+def uptime():
+    try:
+        return open("/proc/loadavg").read().split()[:3]
+    except OSError:
+        return []
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--fdem", default="build/openmp/fdem")
+    ap.add_argument("--parts", default="2,4,8,16,64")
+    ap.add_argument("--methods", default="metis,rcb,block")
+    ap.add_argument("--out", default="perf/results/partition.json")
+    ap.add_argument("--quick", action="store_true")
+    a = ap.parse_args()
+    parts = [int(p) for p in a.parts.split(",")]
+    methods = a.methods.split(",")
+    meshes = MESHES[:2] if a.quick else MESHES
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    rows, notes = [], []
+    load_before = uptime()
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, case, sets in meshes:
+            for m in methods:
+                for n in parts:
+                    cmd = [a.fdem, "partition", case, "--parts", str(n), "--method", m, "--out", tmp]
+                    for s in sets:
+                        cmd += ["--set", s]
+                    t0 = time.time()
+                    r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+                    if r.returncode != 0:
+                        note = f"{label} {m} N={n}: exit {r.returncode}: {r.stderr.strip()[-300:]}"
+                        print(note, file=sys.stderr)
+                        notes.append(note)
+                        if "built without" in r.stderr:
+                            break  # the method is not in this build: skip its other part counts
+                        continue
+                    with open(os.path.join(tmp, "partition.json")) as f:
+                        d = json.load(f)
+                    row = {"mesh": label, "case": case, "set": sets, "method": m, "parts": n,
+                           "elements": d["elements"], "interfaces": d["interfaces"],
+                           "interfaces_cut": d["interfaces_cut"],
+                           "cut_fraction": d["interfaces_cut"] / max(1, d["interfaces"]),
+                           "ghosts": d["ghosts"], "max_ghosts_per_part": max(d["ghosts_per_part"]),
+                           "imbalance": d["imbalance"], "element_imbalance": d["element_imbalance"],
+                           "partition_seconds": d["seconds"], "command_seconds": time.time() - t0}
+                    rows.append(row)
+                    print(f"{label:18s} {m:11s} N={n:3d}  cut {row['interfaces_cut']:7d} "
+                          f"({100 * row['cut_fraction']:5.2f} %)  imbalance {100 * row['imbalance']:5.2f} %  "
+                          f"{row['partition_seconds']:.4f} s", flush=True)
+    out = {"command": " ".join([sys.argv[0]] + sys.argv[1:]), "load_before": load_before,
+           "load_after": uptime(), "threads": 1, "rows": rows, "notes": notes}
+    os.makedirs(os.path.dirname(a.out) or ".", exist_ok=True)
+    with open(a.out, "w") as f:
+        json.dump(out, f, indent=1)
+        f.write("\n")
+    print("wrote", a.out)
+
+
+if __name__ == "__main__":
+    main()
