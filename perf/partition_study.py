@@ -12,6 +12,7 @@ alone, not the mesh). Every run meshes anew (Gmsh, deterministic); one thread.
 
     perf/partition_study.py [--fdem build/openmp/fdem] [--parts 2,4,8,16,64] \
         [--methods metis,rcb,block] [--out perf/results/partition.json] [--quick]
+    perf/partition_study.py --markdown [--out perf/results/partition.json]   # the tables of docs/parallel.md
 
 Methods: metis (METIS k-way on the interface graph), rcb and block (plain baselines written here:
 coordinate bisection; contiguous ranges of the Morton-ordered elements); zoltan-rcb, zoltan-rib,
@@ -40,6 +41,38 @@ def uptime():
         return []
 
 
+def markdown(path):
+    """The tables of docs/parallel.md from a results file: interfaces cut, then imbalance and time."""
+    with open(path) as f:
+        d = json.load(f)
+    rows = d["rows"]
+    methods = list(dict.fromkeys(r["method"] for r in rows))
+    meshes = list(dict.fromkeys(r["mesh"] for r in rows))
+    by = {(r["mesh"], r["method"], r["parts"]): r for r in rows}
+    out = []
+    for title, cell in (
+            ("interfaces cut (% of the mesh's interfaces)",
+             lambda r: f"{r['interfaces_cut']} ({100 * r['cut_fraction']:.1f} %)"),
+            ("ghost nodes (the positions exchanged per step, all parts) / ghost elements",
+             lambda r: f"{r['ghost_nodes']} / {r['ghosts']}"),
+            ("load imbalance (max/mean - 1, %) / partition time (ms)",
+             lambda r: f"{100 * r['imbalance']:.1f} / {1000 * r['partition_seconds']:.1f}")):
+        out.append(f"{title}:\n")
+        out.append("| mesh | N | " + " | ".join(methods) + " |")
+        out.append("|---|---|" + "---|" * len(methods))
+        for mesh in meshes:
+            ns = sorted({r["parts"] for r in rows if r["mesh"] == mesh})
+            for n in ns:
+                first = next(r for r in rows if r["mesh"] == mesh)
+                label = f"{mesh} ({first['elements']} el., {first['interfaces']} if.)" if n == ns[0] else ""
+                cells = [cell(by[(mesh, m, n)]) if (mesh, m, n) in by else "—" for m in methods]
+                out.append(f"| {label} | {n} | " + " | ".join(cells) + " |")
+        out.append("")
+    out.append(f"Load average before / after: {' '.join(d['load_before'])} / {' '.join(d['load_after'])} "
+               f"(2 cores); one thread; command: `{d['command']}`")
+    print("\n".join(out))
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--fdem", default="build/openmp/fdem")
@@ -47,7 +80,11 @@ def main():
     ap.add_argument("--methods", default="metis,rcb,block")
     ap.add_argument("--out", default="perf/results/partition.json")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--markdown", action="store_true", help="print the tables of an existing --out file")
     a = ap.parse_args()
+    if a.markdown:
+        markdown(a.out)
+        return
     parts = [int(p) for p in a.parts.split(",")]
     methods = a.methods.split(",")
     meshes = MESHES[:2] if a.quick else MESHES
@@ -77,6 +114,8 @@ def main():
                            "interfaces_cut": d["interfaces_cut"],
                            "cut_fraction": d["interfaces_cut"] / max(1, d["interfaces"]),
                            "ghosts": d["ghosts"], "max_ghosts_per_part": max(d["ghosts_per_part"]),
+                           "ghost_nodes": d["ghost_nodes"],
+                           "max_ghost_nodes_per_part": max(d["ghost_nodes_per_part"]),
                            "imbalance": d["imbalance"], "element_imbalance": d["element_imbalance"],
                            "partition_seconds": d["seconds"], "command_seconds": time.time() - t0}
                     rows.append(row)

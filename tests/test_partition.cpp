@@ -91,19 +91,30 @@ TEST(Partition, CutAndGhostCountsMatchBruteForce) {
       EXPECT_EQ(s.interfaces_cut, cut);
       EXPECT_GT(cut, 0);
       EXPECT_EQ(s.shared_faces, 0);
-      std::vector<std::set<int>> ghosts(n);
+      std::vector<std::set<int>> ghosts(n), nodes(n);
+      const int d = m->dim;
       for (int i = 0; i < m->num_ifaces(); ++i) {
         const int a = m->iface_elems[2 * i], b = m->iface_elems[2 * i + 1];
         if (part[a] == part[b]) continue;
         ghosts[part[a]].insert(b);
         ghosts[part[b]].insert(a);
+        for (int k = 0; k < d; ++k) {
+          nodes[part[a]].insert(m->ifaces[2 * d * i + d + k]);  // side B's nodes, for A's part
+          nodes[part[b]].insert(m->ifaces[2 * d * i + k]);
+        }
       }
-      long total = 0;
+      long total = 0, total_nodes = 0;
       for (int p = 0; p < n; ++p) {
         EXPECT_EQ(s.ghosts_per_part[p], static_cast<long>(ghosts[p].size()));
+        EXPECT_EQ(s.ghost_nodes_per_part[p], static_cast<long>(nodes[p].size()));
         total += ghosts[p].size();
+        total_nodes += nodes[p].size();
       }
       EXPECT_EQ(s.ghosts, total);
+      EXPECT_EQ(s.ghost_nodes, total_nodes);
+      // a ghost node lies on at least one cut face, and each cut face brings dim of them to each side
+      EXPECT_LE(s.ghost_nodes, 2L * d * cut);
+      EXPECT_GT(s.ghost_nodes, 0);
     }
 }
 
@@ -154,6 +165,30 @@ TEST(Partition, BadArgumentsThrowInputErrorNamingTheOption) {
   EXPECT_THROW(fdem::parse_partition_method("scotch"), fdem::InputError);
   EXPECT_EQ(static_cast<int>(fdem::partition_elements(m, m.num_elems(), PartitionMethod::Rcb).size()),
             m.num_elems());
+}
+
+// Zoltan's geometric partitioners where the build has them (-DFDEM_ENABLE_MPI=ON); else the
+// method is refused with a message naming the build option.
+TEST(Partition, ZoltanMethodsBalancedOrRefusedNamingTheBuildOption) {
+  if (!fdem::partition_has_zoltan()) {
+    try {
+      fdem::parse_partition_method("zoltan-rcb");
+      ADD_FAILURE() << "zoltan-rcb accepted by a build without Zoltan";
+    } catch (const fdem::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("FDEM_ENABLE_MPI"), std::string::npos) << e.what();
+    }
+    return;
+  }
+  for (const char* name : {"zoltan-rcb", "zoltan-rib", "zoltan-hsfc"})
+    for (const HostMesh* m : {&disc(), &sphere()}) {
+      const int n = 8;
+      const auto part = fdem::partition_elements(*m, n, fdem::parse_partition_method(name));
+      const auto s = fdem::partition_stats(*m, part, n);
+      for (int p : part) ASSERT_TRUE(p >= 0 && p < n);
+      for (long c : s.elements_per_part) EXPECT_GT(c, 0) << name;
+      EXPECT_LT(s.imbalance, 0.05) << name;
+      EXPECT_EQ(s.interfaces_cut, brute_force_cut(*m, part));
+    }
 }
 
 // The command: files written, exit 2 with a message naming the option for bad input.

@@ -259,7 +259,9 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
       std::vector<double> xyz(static_cast<size_t>(ne) * mesh.dim);
       for (int e = 0; e < ne; ++e)
         for (int d = 0; d < mesh.dim; ++d) xyz[static_cast<size_t>(e) * mesh.dim + d] = c[e][d];
-      const char* lb = method == PartitionMethod::ZoltanRcb ? "RCB" : method == PartitionMethod::ZoltanRib ? "RIB" : "HSFC";
+      const char* lb = method == PartitionMethod::ZoltanRcb   ? "RCB"
+                       : method == PartitionMethod::ZoltanRib ? "RIB"
+                                                              : "HSFC";
       part = zoltan_partition(mesh.dim, xyz, std::vector<float>(w.begin(), w.end()), parts, lb);
 #else
       throw InputError(std::string("--method ") + partition_method_name(method) + kNoZoltan);
@@ -304,6 +306,22 @@ PartitionStats partition_stats(const HostMesh& mesh, const std::vector<int>& par
       if (e < o) ++(g.kind[j] == 0 ? s.interfaces_cut : s.shared_faces_cut);
     }
   }
+  s.ghost_nodes_per_part.assign(parts, 0);
+  std::vector<std::pair<int, int>> gnodes;  // (part, node of the other side of a cut interface)
+  const int d = mesh.dim;
+  for (int i = 0; i < mesh.num_ifaces(); ++i) {
+    const int a = mesh.iface_elems[2 * static_cast<size_t>(i)],
+              b = mesh.iface_elems[2 * static_cast<size_t>(i) + 1];
+    if (a < 0 || b < 0 || a >= ne || b >= ne || part[a] == part[b]) continue;
+    for (int k = 0; k < d; ++k) {
+      gnodes.emplace_back(part[a], mesh.ifaces[2 * d * static_cast<size_t>(i) + d + k]);
+      gnodes.emplace_back(part[b], mesh.ifaces[2 * d * static_cast<size_t>(i) + k]);
+    }
+  }
+  std::sort(gnodes.begin(), gnodes.end());
+  gnodes.erase(std::unique(gnodes.begin(), gnodes.end()), gnodes.end());
+  for (const auto& pn : gnodes) ++s.ghost_nodes_per_part[pn.first];
+  s.ghost_nodes = static_cast<long>(gnodes.size());
   std::sort(ghost.begin(), ghost.end());
   ghost.erase(std::unique(ghost.begin(), ghost.end()), ghost.end());
   for (const auto& pe : ghost) ++s.ghosts_per_part[pe.first];
@@ -327,10 +345,12 @@ nlohmann::json partition_stats_json(const PartitionStats& s) {
           {"interfaces_cut", s.interfaces_cut},
           {"shared_faces_cut", s.shared_faces_cut},
           {"ghosts", s.ghosts},
+          {"ghost_nodes", s.ghost_nodes},
           {"seconds", s.seconds},
           {"elements_per_part", s.elements_per_part},
           {"load_per_part", s.load_per_part},
-          {"ghosts_per_part", s.ghosts_per_part}};
+          {"ghosts_per_part", s.ghosts_per_part},
+          {"ghost_nodes_per_part", s.ghost_nodes_per_part}};
 }
 
 std::string partition_report_text(const nlohmann::json& r) {
@@ -344,18 +364,20 @@ std::string partition_report_text(const nlohmann::json& r) {
                 r.value("method", "").c_str(), r.value("parts", 0), r.value("seconds", 0.0));
   t += buf;
   const long ni = r.value("interfaces", 0L);
-  std::snprintf(buf, sizeof buf,
-                "load imbalance (max/mean - 1 of elements + side-A interfaces) %.2f %%, of elements %.2f %%\n"
-                "interfaces cut %ld (%.2f %% of all), shared faces cut %ld, ghost elements %ld\n",
-                100 * r.value("imbalance", 0.0), 100 * r.value("element_imbalance", 0.0),
-                r.value("interfaces_cut", 0L), ni ? 100.0 * r.value("interfaces_cut", 0L) / ni : 0.0,
-                r.value("shared_faces_cut", 0L), r.value("ghosts", 0L));
+  std::snprintf(
+      buf, sizeof buf,
+      "load imbalance (max/mean - 1 of elements + side-A interfaces) %.2f %%, of elements %.2f %%\n"
+      "interfaces cut %ld (%.2f %% of all), shared faces cut %ld, ghost elements %ld, ghost nodes %ld\n",
+      100 * r.value("imbalance", 0.0), 100 * r.value("element_imbalance", 0.0), r.value("interfaces_cut", 0L),
+      ni ? 100.0 * r.value("interfaces_cut", 0L) / ni : 0.0, r.value("shared_faces_cut", 0L),
+      r.value("ghosts", 0L), r.value("ghost_nodes", 0L));
   t += buf;
-  t += "  part  elements      load    ghosts\n";
-  const auto &el = r["elements_per_part"], &ld = r["load_per_part"], &gh = r["ghosts_per_part"];
+  t += "  part  elements      load    ghosts  ghost nodes\n";
+  const auto &el = r["elements_per_part"], &ld = r["load_per_part"], &gh = r["ghosts_per_part"],
+             &gn = r["ghost_nodes_per_part"];
   for (size_t p = 0; p < el.size(); ++p) {
-    std::snprintf(buf, sizeof buf, "%6zu %9ld %9ld %9ld\n", p, el[p].get<long>(), ld[p].get<long>(),
-                  gh[p].get<long>());
+    std::snprintf(buf, sizeof buf, "%6zu %9ld %9ld %9ld %12ld\n", p, el[p].get<long>(), ld[p].get<long>(),
+                  gh[p].get<long>(), gn[p].get<long>());
     t += buf;
   }
   return t;

@@ -54,15 +54,18 @@ void partition_init(PartitionMethod method);
 struct PartitionStats {
   int parts = 0;
   long elements = 0, interfaces = 0, shared_faces = 0;
-  std::vector<long> elements_per_part, load_per_part, ghosts_per_part;
+  std::vector<long> elements_per_part, load_per_part, ghosts_per_part, ghost_nodes_per_part;
   double imbalance = 0;          // max / mean - 1 of load_per_part (elements + side-A interfaces)
   double element_imbalance = 0;  // max / mean - 1 of elements_per_part
   long interfaces_cut = 0;       // interfaces whose two elements lie in different parts
   long shared_faces_cut = 0;     // continuous faces (shared nodes) between different parts
   long ghosts = 0;               // sum of ghosts_per_part
+  long ghost_nodes = 0;          // sum of ghost_nodes_per_part
   double seconds = 0;            // wall time of the partition (set by the caller)
 };
 // Ghost elements of part p: elements of other parts that share an interface or a face with p.
+// Ghost nodes of p: the other side's nodes of p's cut interfaces (distinct): the positions p needs
+// from other parts each step to compute those interfaces (dim doubles each).
 PartitionStats partition_stats(const HostMesh& mesh, const std::vector<int>& part, int parts);
 nlohmann::json partition_stats_json(const PartitionStats& s);
 // A few lines for a person: the totals, then elements, load and ghosts per part.

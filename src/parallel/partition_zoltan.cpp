@@ -64,7 +64,8 @@ void zoltan_init() {
     std::atexit(finalize_mpi);
   }
   float version = 0;
-  if (Zoltan_Initialize(0, nullptr, &version) != ZOLTAN_OK) throw std::runtime_error("Zoltan_Initialize failed");
+  if (Zoltan_Initialize(0, nullptr, &version) != ZOLTAN_OK)
+    throw std::runtime_error("Zoltan_Initialize failed");
   done = true;
 }
 
@@ -97,7 +98,8 @@ std::vector<int> zoltan_partition(int dim, const std::vector<double>& xyz, const
   Zoltan_LB_Free_Part(&egid, &elid, &eproc, &epart);
   Zoltan_Destroy(&zz);
   if (rc != ZOLTAN_OK)
-    throw std::runtime_error("Zoltan_LB_Partition (" + lb_method + ") failed with status " + std::to_string(rc));
+    throw std::runtime_error("Zoltan_LB_Partition (" + lb_method + ") failed with status " +
+                             std::to_string(rc));
   return part;
 }
 
