@@ -55,8 +55,12 @@ struct PartitionStats {
   int parts = 0;
   long elements = 0, interfaces = 0, shared_faces = 0;
   std::vector<long> elements_per_part, load_per_part, ghosts_per_part, ghost_nodes_per_part;
+  // load + the cut interfaces whose side B the part owns: a cut interface is computed by both
+  // parts (docs/parallel.md), so this is the work of a step
+  std::vector<long> work_per_part;
   double imbalance = 0;          // max / mean - 1 of load_per_part (elements + side-A interfaces)
   double element_imbalance = 0;  // max / mean - 1 of elements_per_part
+  double work_imbalance = 0;     // max of work_per_part / mean of load_per_part - 1
   long interfaces_cut = 0;       // interfaces whose two elements lie in different parts
   long shared_faces_cut = 0;     // continuous faces (shared nodes) between different parts
   long ghosts = 0;               // sum of ghosts_per_part
