@@ -71,7 +71,7 @@ def markdown(path):
                 out.append(f"| {label} | {n} | " + " | ".join(cells) + " |")
         out.append("")
     out.append(f"Load average before / after: {' '.join(d['load_before'])} / {' '.join(d['load_after'])} "
-               f"(2 cores); one thread; command: `{d['command']}`")
+               f"(2 cores);\none thread; command: `{d['command']}`")
     print("\n".join(out))
 
 
