@@ -234,8 +234,8 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
     METIS_SetDefaultOptions(options);
     options[METIS_OPTION_NUMBERING] = 0;
     options[METIS_OPTION_SEED] = 1;  // fixed: the same partition every time
-    // the best of 4 tries (different seeds inside METIS): 0-10 % fewer cut interfaces than one try on
-    // the shipped meshes at 2-3 times the time (docs/parallel.md)
+    // the best of 4 tries (different seeds inside METIS): 0-12 % fewer cut interfaces than one try on
+    // the disc and the 3D impact at 2-16 parts, at 2-3 times the time
     options[METIS_OPTION_NCUTS] = 4;
     // load within 1 % of the mean (METIS's default: 3 %): 1-3 % more interfaces cut on the 3D impact
     // meshes at 8 and 64 parts, imbalance 0.3-1.0 % instead of 0.7-3.0 % (docs/parallel.md)
