@@ -11,13 +11,20 @@ ghost element and an exchange per step: the exchange volume), ghost elements, lo
 alone, not the mesh). Every run meshes anew (Gmsh, deterministic); one thread.
 
     perf/partition_study.py [--fdem build/openmp/fdem] [--parts 2,4,8,16,64] \
-        [--methods metis,rcb,block] [--out perf/results/partition.json] [--quick]
+        [--methods metis,rcb,block] [--out perf/results/partition.json] [--quick] \
+        [--rebalance RUN_DIR]
     perf/partition_study.py --markdown [--out perf/results/partition.json]   # the tables of docs/parallel.md
 
 Methods: metis (METIS k-way on the interface graph), rcb and block (plain baselines written here:
 coordinate bisection; contiguous ranges of the Morton-ordered elements); zoltan-rcb, zoltan-rib,
 zoltan-hsfc where fdem was configured with -DFDEM_ENABLE_MPI=ON (a method the build lacks is
 skipped with a note). --quick: the two coarse meshes only.
+
+--rebalance RUN_DIR: RUN_DIR holds a run of the 3D impact at its defaults
+(`fdem run cases/particle_impact_3d/case.json --out RUN_DIR`); for that mesh each partition is also
+made again at the last frame of RUN_DIR/snapshots.h5 (moved nodes, failed interfaces dropped:
+`fdem partition --snapshot`), and the rows get the elements a rebalance moves and the cut without
+and with it.
 """
 import argparse
 import json
@@ -70,6 +77,24 @@ def markdown(path):
                 cells = [cell(by[(mesh, m, n)]) if (mesh, m, n) in by else "—" for m in methods]
                 out.append(f"| {label} | {n} | " + " | ".join(cells) + " |")
         out.append("")
+    rb = [r for r in rows if "rebalance" in r]
+    if rb:
+        t = rb[0]["rebalance"]
+        out.append(f"rebalance of {rb[0]['mesh']} at t = {1e6 * t['time']:.0f} us ({t['failed_interfaces']} "
+                   "interfaces failed): elements moved (%) / interfaces cut without rebalance -> with:\n")
+        out.append("| N | " + " | ".join(m for m in methods if any(r["method"] == m for r in rb)) + " |")
+        out.append("|---|" + "---|" * len({r["method"] for r in rb}))
+        for n in sorted({r["parts"] for r in rb}):
+            cells = []
+            for m in methods:
+                r = next((r for r in rb if r["method"] == m and r["parts"] == n), None)
+                if r is None:
+                    continue
+                b = r["rebalance"]
+                cells.append(f"{100 * b['migrated_fraction']:.1f} % / {b['kept_interfaces_cut']} -> "
+                             f"{b['interfaces_cut']}")
+            out.append(f"| {n} | " + " | ".join(cells) + " |")
+        out.append("")
     out.append(f"Load average before / after: {' '.join(d['load_before'])} / {' '.join(d['load_after'])} "
                f"(2 cores);\none thread; command: `{d['command']}`")
     print("\n".join(out))
@@ -82,6 +107,7 @@ def main():
     ap.add_argument("--methods", default="metis,rcb,block")
     ap.add_argument("--out", default="perf/results/partition.json")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--rebalance", default="", help="folder of a run of the 3D impact at its defaults")
     ap.add_argument("--markdown", action="store_true", help="print the tables of an existing --out file")
     a = ap.parse_args()
     if a.markdown:
@@ -100,6 +126,9 @@ def main():
                     cmd = [a.fdem, "partition", case, "--parts", str(n), "--method", m, "--out", tmp]
                     for s in sets:
                         cmd += ["--set", s]
+                    rebalance = a.rebalance and label == "impact_3d_h3mm"
+                    if rebalance:
+                        cmd += ["--snapshot", os.path.join(a.rebalance, "snapshots.h5")]
                     t0 = time.time()
                     r = subprocess.run(cmd, env=env, capture_output=True, text=True)
                     if r.returncode != 0:
@@ -121,6 +150,17 @@ def main():
                            "imbalance": d["imbalance"], "element_imbalance": d["element_imbalance"],
                            "work_imbalance": d["work_imbalance"],
                            "partition_seconds": d["seconds"], "command_seconds": time.time() - t0}
+                    if rebalance:
+                        rb = d["rebalance"]
+                        row["rebalance"] = {
+                            "time": rb["time"], "failed_interfaces": rb["failed_interfaces"],
+                            "migrated_fraction": rb["migrated_fraction"],
+                            "kept_interfaces_cut": rb["kept"]["interfaces_cut"],
+                            "kept_ghost_nodes": rb["kept"]["ghost_nodes"],
+                            "kept_imbalance": rb["kept"]["imbalance"],
+                            "interfaces_cut": rb["rebalanced"]["interfaces_cut"],
+                            "ghost_nodes": rb["rebalanced"]["ghost_nodes"],
+                            "imbalance": rb["rebalanced"]["imbalance"]}
                     rows.append(row)
                     print(f"{label:18s} {m:11s} N={n:3d}  cut {row['interfaces_cut']:7d} "
                           f"({100 * row['cut_fraction']:5.2f} %)  imbalance {100 * row['imbalance']:5.2f} %  "

@@ -203,6 +203,36 @@ TEST(Partition, ZoltanMethodsBalancedOrRefusedNamingTheBuildOption) {
     }
 }
 
+TEST(Partition, MigratedElementsIgnoreRenamedParts) {
+  const std::vector<int> before{0, 0, 1, 1, 2, 2};
+  EXPECT_EQ(fdem::migrated_elements(before, {2, 2, 0, 0, 1, 1}, 3), 0);
+  EXPECT_EQ(fdem::migrated_elements(before, {2, 2, 0, 1, 1, 1}, 3), 1);
+  // each part of `after` holds one element of two parts of `before`: renamed, it keeps one of them
+  EXPECT_EQ(fdem::migrated_elements(before, {0, 1, 2, 0, 1, 2}, 3), 3);
+}
+
+// A rigid translation moves no element under a geometric method, nor (the graph unchanged) under
+// METIS; failed interfaces leave the graph and the counts.
+TEST(Partition, MovedMeshTranslatedMovesNothingAndDropsFailedInterfaces) {
+  const HostMesh& m = disc();
+  std::vector<double> x(3 * static_cast<size_t>(m.num_nodes()), 0.0);
+  for (int n = 0; n < m.num_nodes(); ++n)
+    for (int k = 0; k < 2; ++k) x[3 * n + k] = m.X[2 * n + k] + (k == 0 ? 0.75 : -0.25);
+  std::vector<double> damage(m.num_ifaces(), 0.0);
+  const HostMesh same = fdem::moved_mesh(m, x, damage);
+  EXPECT_EQ(same.num_ifaces(), m.num_ifaces());
+  for (PartitionMethod method : {PartitionMethod::Metis, PartitionMethod::Rcb}) {
+    const auto a = fdem::partition_elements(m, 6, method), b = fdem::partition_elements(same, 6, method);
+    EXPECT_EQ(fdem::migrated_elements(a, b, 6), 0) << fdem::partition_method_name(method);
+  }
+  for (int i = 0; i < 40; ++i) damage[3 * i] = 1.0;
+  damage[1] = 0.99;  // damaged, not failed: stays
+  const HostMesh cracked = fdem::moved_mesh(m, x, damage);
+  EXPECT_EQ(cracked.num_ifaces(), m.num_ifaces() - 40);
+  const auto part = fdem::partition_elements(cracked, 4, PartitionMethod::Metis);
+  EXPECT_EQ(fdem::partition_stats(cracked, part, 4).interfaces_cut, brute_force_cut(cracked, part));
+}
+
 // The command: files written, exit 2 with a message naming the option for bad input.
 TEST(Partition, CommandWritesStatsAndRejectsBadInput) {
   namespace fs = std::filesystem;
@@ -236,6 +266,42 @@ TEST(Partition, CommandWritesStatsAndRejectsBadInput) {
   fs::remove_all(dir);
   fs::remove(dir + ".log");
   fs::remove(dir + ".err");
+}
+
+// --snapshot: the rebalance at the last frame of a run of the same case; a snapshot of another
+// mesh is refused (exit 2) naming the option.
+TEST(Partition, CommandRebalancesAtTheLastSnapshot) {
+  using fdem::test::slurp;
+  using fdem::test::system_status;
+  const std::string dir = fdem::test::scratch_dir("partition", "snapshot");
+  const std::string bar = std::string(FDEM_TEST_DATA) + "/cases/bar.json --set output.snapshot_count=2";
+  const std::string fdem = std::string("OMP_NUM_THREADS=1 ") + FDEM_BINARY;
+  ASSERT_EQ(system_status(fdem + " run " + bar + " --quiet --out " + dir + "/run > " + dir + ".log 2>&1"), 0)
+      << slurp(dir + ".log");
+  const std::string snap = " --snapshot " + dir + "/run/snapshots.h5";
+  ASSERT_EQ(system_status(fdem + " partition " + bar + " --parts 2" + snap + " --out " + dir + "/p > " + dir +
+                          ".log 2>&1"),
+            0)
+      << slurp(dir + ".log");
+  const auto j = nlohmann::json::parse(slurp(dir + "/p/partition.json"));
+  const auto& r = j["rebalance"];
+  EXPECT_GT(r["time"].get<double>(), 0);
+  EXPECT_EQ(r["rebalanced"]["elements"], j["elements"]);
+  EXPECT_EQ(r["rebalanced"]["interfaces"].get<long>(),
+            j["interfaces"].get<long>() - r["failed_interfaces"].get<long>());
+  EXPECT_GE(r["migrated_elements"].get<long>(), 0);
+  EXPECT_LE(r["migrated_elements"].get<long>(),
+            j["elements"].get<long>() / 2);  // after renaming: at most half
+  const std::string disc_case = std::string(FDEM_SOURCE_DIR) + "/cases/brazilian_disc/case.json";
+  EXPECT_EQ(system_status(fdem + " partition " + disc_case + " --parts 2" + snap + " --out " + dir + "/q > " +
+                          dir + ".err 2>&1"),
+            2);
+  const std::string err = slurp(dir + ".err");
+  EXPECT_NE(err.find("--snapshot"), std::string::npos) << err;
+  EXPECT_NE(err.find("not of this mesh"), std::string::npos) << err;
+  std::filesystem::remove_all(dir);
+  std::filesystem::remove(dir + ".log");
+  std::filesystem::remove(dir + ".err");
 }
 
 }  // namespace

@@ -128,6 +128,7 @@ struct CliOptions {
   std::string restart;
   int parts = 0;                 // partition
   std::string method = "metis";  // partition
+  std::string snapshot;          // partition
 };
 
 // A finite time >= 0 in seconds, with a short message (CLI11's NonNegativeNumber prints the whole
@@ -177,6 +178,8 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   part->add_option("--method", o.method, "metis (default), rcb or block");
   part->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
   part->add_option("--out", o.out_dir, "output folder (default: out/<case name>)");
+  part->add_option("--snapshot", o.snapshot,
+                   "also the rebalance at the last frame of this snapshots.h5 of a run of the case");
 
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
 }
@@ -190,7 +193,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
       std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
     } else if (app.got_subcommand("partition")) {
-      const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir);
+      const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir, o.snapshot);
       std::cout << fdem::partition_report_text(r) << "wrote " << r["files"][0].get<std::string>() << ", "
                 << r["files"][1].get<std::string>() << "\n";
     } else if (app.got_subcommand("run")) {

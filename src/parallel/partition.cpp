@@ -349,6 +349,48 @@ PartitionStats partition_stats(const HostMesh& mesh, const std::vector<int>& par
   return s;
 }
 
+long migrated_elements(const std::vector<int>& before, const std::vector<int>& after, int parts) {
+  if (before.size() != after.size())
+    throw std::logic_error("migrated_elements: partitions of different meshes");
+  std::vector<long> overlap(static_cast<size_t>(parts) * parts, 0);  // [after][before]
+  for (size_t e = 0; e < before.size(); ++e) ++overlap[static_cast<size_t>(after[e]) * parts + before[e]];
+  std::vector<size_t> order(overlap.size());
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return overlap[a] > overlap[b]; });
+  std::vector<int> rename(parts, -1);
+  std::vector<bool> taken(parts, false);
+  for (size_t k : order) {
+    const int a = static_cast<int>(k / parts), b = static_cast<int>(k % parts);
+    if (rename[a] < 0 && !taken[b]) {
+      rename[a] = b;
+      taken[b] = true;
+    }
+  }
+  long moved = 0;
+  for (size_t e = 0; e < before.size(); ++e) moved += rename[after[e]] != before[e];
+  return moved;
+}
+
+HostMesh moved_mesh(const HostMesh& mesh, const std::vector<double>& x, const std::vector<double>& damage) {
+  HostMesh m = mesh;
+  const int nn = mesh.num_nodes(), d = mesh.dim;
+  if (x.size() != static_cast<size_t>(nn) * 3 || damage.size() != static_cast<size_t>(mesh.num_ifaces()))
+    throw std::logic_error("moved_mesh: positions or damage of another mesh");
+  for (int n = 0; n < nn; ++n)
+    for (int k = 0; k < d; ++k) m.X[static_cast<size_t>(n) * d + k] = x[3 * static_cast<size_t>(n) + k];
+  m.ifaces.clear();
+  m.iface_elems.clear();
+  for (int i = 0; i < mesh.num_ifaces(); ++i) {
+    if (damage[i] >= 1) continue;
+    m.ifaces.insert(m.ifaces.end(), mesh.ifaces.begin() + 2 * d * static_cast<size_t>(i),
+                    mesh.ifaces.begin() + 2 * d * static_cast<size_t>(i + 1));
+    m.iface_elems.push_back(mesh.iface_elems[2 * static_cast<size_t>(i)]);
+    m.iface_elems.push_back(mesh.iface_elems[2 * static_cast<size_t>(i) + 1]);
+  }
+  m.iface_sets.clear();
+  return m;
+}
+
 nlohmann::json partition_stats_json(const PartitionStats& s) {
   return {{"parts", s.parts},
           {"elements", s.elements},

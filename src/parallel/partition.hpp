@@ -75,13 +75,25 @@ nlohmann::json partition_stats_json(const PartitionStats& s);
 // A few lines for a person: the totals, then elements, load and ghosts per part.
 std::string partition_report_text(const nlohmann::json& report);
 
+// Elements that change part from `before` to `after` once the part ids of `after` are renamed to
+// match those of `before` (greedily, largest overlap first): what a rebalance would move.
+long migrated_elements(const std::vector<int>& before, const std::vector<int>& after, int parts);
+
+// The mesh as a rebalance during a run would see it: node positions `x` (num_nodes * 3, z ignored
+// in 2D: a snapshot's coordinates) and without the interfaces whose damage is 1 (failed: handed to
+// contact, no longer an edge of the graph nor an exchange).
+HostMesh moved_mesh(const HostMesh& mesh, const std::vector<double>& x, const std::vector<double>& damage);
+
 // Legacy VTK (binary) of the mesh with the cell fields "part" and "region", for ParaView.
 void write_partition_vtk(const std::string& path, const HostMesh& mesh, const std::vector<int>& part);
 
 // `fdem partition`: loads the case (with --set overrides), prepares its mesh as a run does,
 // partitions it, writes out_dir/partition.json (stats) and out_dir/partition.vtk, and returns
-// the stats. out_dir empty: out/<case name>.
+// the stats. out_dir empty: out/<case name>. With a snapshot file (snapshots.h5 of a run of the
+// same case and --set options): also the rebalance at its last frame (moved_mesh): the partition
+// of the moved mesh, its stats, and the elements it moves (migrated_elements) under "rebalance".
 nlohmann::json partition_case(const std::string& case_path, const std::vector<std::string>& overrides,
-                              int parts, const std::string& method, const std::string& out_dir);
+                              int parts, const std::string& method, const std::string& out_dir,
+                              const std::string& snapshot = "");
 
 }  // namespace fdem
