@@ -81,7 +81,7 @@ def markdown(path):
     if rb:
         t = rb[0]["rebalance"]
         out.append(f"rebalance of {rb[0]['mesh']} at t = {1e6 * t['time']:.0f} us ({t['failed_interfaces']} "
-                   "interfaces failed): elements moved (%) / interfaces cut without rebalance -> with:\n")
+                   "interfaces failed):\nelements moved (%) / interfaces cut without rebalance -> with:\n")
         out.append("| N | " + " | ".join(m for m in methods if any(r["method"] == m for r in rb)) + " |")
         out.append("|---|" + "---|" * len({r["method"] for r in rb}))
         for n in sorted({r["parts"] for r in rb}):
