@@ -18,6 +18,7 @@
 #include "common/error.hpp"
 #include "common/kernel_times.hpp"
 #include "fdem_version.hpp"
+#include "parallel/partition.hpp"
 #include "solver/run.hpp"
 
 namespace {
@@ -125,6 +126,9 @@ struct CliOptions {
   bool moduli = false;
   double checkpoint_every = -1;
   std::string restart;
+  int parts = 0;                 // partition
+  std::string method = "metis";  // partition
+  std::string snapshot;          // partition
 };
 
 // A finite time >= 0 in seconds, with a short message (CLI11's NonNegativeNumber prints the whole
@@ -166,6 +170,17 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
                   "also the effective elastic moduli of the mesh with its interfaces (a static solve; "
                   "docs/case-format.md)");
 
+  auto* part = app.add_subcommand("partition",
+                                  "partition a case's elements into parts (docs/parallel.md): "
+                                  "statistics, OUT/partition.json and OUT/partition.vtk");
+  part->add_option("case", o.case_path, "case file (JSON)")->required();
+  part->add_option("--parts", o.parts, "number of parts, in [1, number of elements]")->required();
+  part->add_option("--method", o.method, "metis (default), rcb or block");
+  part->add_option("--set", o.sets, "override a case field: key.path=value (repeatable)");
+  part->add_option("--out", o.out_dir, "output folder (default: out/<case name>)");
+  part->add_option("--snapshot", o.snapshot,
+                   "also the rebalance at the last frame of this snapshots.h5 of a run of the case");
+
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
 }
 
@@ -177,6 +192,10 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
     } else if (app.got_subcommand("check")) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
       std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
+    } else if (app.got_subcommand("partition")) {
+      const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir, o.snapshot);
+      std::cout << fdem::partition_report_text(r) << "wrote " << r["files"][0].get<std::string>() << ", "
+                << r["files"][1].get<std::string>() << "\n";
     } else if (app.got_subcommand("run")) {
       fdem::RunOptions opt;
       opt.out_dir = o.out_dir;

@@ -35,8 +35,10 @@ std::vector<std::string> region_sets_used(const Case& c) {
   return out;
 }
 
-// Mesh of a case, ready for the solver: built or read, checked, renumbered, interfaces inserted.
-// Each part is a set-up phase (common/setup_times.hpp; Gmsh's own inside "mesh").
+}  // namespace
+
+// Mesh of a case, ready for the solver (run.hpp). Each part is a set-up phase
+// (common/setup_times.hpp; Gmsh's own inside "mesh").
 HostMesh prepare_mesh(const Case& c) {
   using setup_times::Phase;
   Phase build("mesh");
@@ -67,6 +69,8 @@ HostMesh prepare_mesh(const Case& c) {
   check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
   return mesh;
 }
+
+namespace {
 
 // The resolved case without the keys that do not change the results: the checkpoint interval,
 // and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken

@@ -8,6 +8,9 @@
 
 namespace fdem {
 
+struct Case;
+struct HostMesh;
+
 struct RunOptions {
   std::string out_dir;                // default: ./out/<case name>
   std::vector<std::string> overrides;  // --set key.path=value
@@ -33,5 +36,9 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt);
 // quality, stable time step). Throws InputError.
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides,
                           bool moduli = false);
+
+// Mesh of a case, ready for the solver: built or read, checked, renumbered (Morton order of the
+// element centroids), interfaces inserted. Throws InputError. Also used by `fdem partition`.
+HostMesh prepare_mesh(const Case& c);
 
 }  // namespace fdem
