@@ -61,7 +61,7 @@ std::string last_step(hid_t f) {
 // (loaded diameter meshed as element edges, padded platens, 0.1 m/s approach for 0.26 mm, then
 // 0.0125 m/s, local damping 0.1) on two of the ten R/12 meshes of the scatter study (4.10 and
 // 4.38 mm; the default is 3 mm = R/17). Measured on the ten (perf/brazil_scatter.py,
-// cases/brazilian_disc/README.md): mean +2.88 % from f_t, standard deviation 2.2 %, +0.86 to
+// cases/brazilian_disc/README.md): mean +2.90 % from f_t, standard deviation 2.28 %, +0.86 to
 // +6.88 %; these two +2.36 and +0.86 %. Each run: the tensile strength 2 P / (pi D t) between
 // f_t - 1.5 % and f_t + 7.5 % (the R/12 mean plus or minus two standard deviations; the case at
 // 0.1 m/s throughout with damping 0.7 gave +10.3 and +7.5 % on these meshes), and the failed
