@@ -578,7 +578,7 @@ class Report:
                f"against the input f_t = {ft / 1e6:g} MPa; wall time from summary.json (set-up, run and output). "
                "One mesh does not decide the strength (issue 23): each point is the mean over the meshes of "
                "element sizes spread around D (`--realisations`), its error bar their standard deviation. "
-               "V is the loading rate of each platen after its approach (the case: 0.1 m/s for the first 0.22 mm, "
+               "V is the loading rate of each platen after its approach (the case: 0.1 m/s for the first 0.26 mm, "
                "V after it; at V = 0.1 m/s one speed throughout).")
         every = d["runs"] + d.get("left_out", [])
         sizes = sorted({r.get("nominal_size_m", r["element_size_m"]) for r in every}, reverse=True)
