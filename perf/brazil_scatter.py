@@ -11,7 +11,10 @@ mesh for each size), and the script reports the mean and standard deviation of
     interfaces_failed > 0), as the same stress 2 P / (pi D t) against f_t;
   - the split's distance from the loaded diameter: the mean |x| of the midpoints of the failed
     interfaces (damage 1 in the last snapshot) with |y| < R/2 (the central half of the diameter,
-    away from the platens);
+    away from the platens); it counts every failure there, wing cracks from the platens after the
+    peak included;
+  - the loaded diameter's own failure (with mesh.embedded_diameter): the share of the diameter's
+    interfaces with |y| < R/2 that failed (1: split on the diameter through the central half);
   - the damage under the platens: failed interfaces with |y| > 0.8 R.
 
     perf/brazil_scatter.py --sizes 0.00417:10,0.003:10,0.00167:10 --out DIR [--spread 0.05] \
@@ -84,6 +87,13 @@ def split_measure(h5path, R):
     central = [abs(x) for x, y in zip(xs, ys) if abs(y) < R / 2]
     out.update({"failed": len(xs), "failed_central": len(central),
            "failed_under_platens": sum(1 for y in ys if abs(y) > 0.8 * R)})
+    # the loaded diameter's own failure (mesh.embedded_diameter: interfaces with both ends on x = 0):
+    # the share of its interfaces with |y| < R/2 that failed. split_offset_m also counts every other
+    # failure of the central band, e.g. wing cracks from the platens after the peak.
+    on = [q for q in range(len(I)) if abs(X[I[q][0]][0]) < 1e-6 * R and abs(X[I[q][1]][0]) < 1e-6 * R
+          and abs(0.5 * (X[I[q][0]][1] + X[I[q][1]][1])) < R / 2]
+    if on:
+        out["diameter_failed_fraction"] = sum(1 for q in on if dmg[q] >= 1.0) / len(on)
     if central:
         out["split_offset_m"] = sum(central) / len(central)
         cy = [y for y in ys if abs(y) < R / 2]
@@ -146,6 +156,7 @@ def summarise(runs):
                     "error": stats([r["error"] for r in rr]),
                     "first_failure_error": stats([r["first_failure_error"] for r in rr]),
                     "split_offset_m": stats([r.get("split_offset_m") for r in rr]),
+                    "diameter_failed_fraction": stats([r.get("diameter_failed_fraction") for r in rr]),
                     "failed_under_platens": stats([r["failed_under_platens"] for r in rr]),
                     "wall_seconds": stats([r["wall_seconds"] for r in rr]),
                     "steps": stats([r["steps"] for r in rr])})
@@ -201,6 +212,7 @@ def main():
                 print(f"{a.label}: h = {1000 * h:.4f} mm: {rec['elements']} elements, sigma_t "
                       f"{100 * rec['error']:+.2f} %, first failure {100 * rec['first_failure_error']:+.2f} %, "
                       f"split offset {1000 * rec.get('split_offset_m', float('nan')):.1f} mm, "
+                      f"diameter failed {rec.get('diameter_failed_fraction', float('nan')):.2f}, "
                       f"{rec['wall_seconds']:.0f} s", flush=True)
 
     with cf.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as ex:
