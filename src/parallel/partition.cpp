@@ -14,6 +14,7 @@
 
 #include "common/error.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/mesh_internal.hpp"  // face_node, sort_face_key, centroid
 
 #ifdef FDEM_HAVE_METIS
 #include <metis.h>
@@ -85,34 +86,9 @@ bool partition_has_zoltan() {
 
 namespace {
 
-// The faces (dim nodes each) of element e, by the local node numbering of a simplex.
-void element_faces(const HostMesh& m, int e, std::array<std::array<int, 3>, 4>& f, int& nf) {
-  const int k = m.nodes_per_elem();
-  const int* n = &m.elems[static_cast<size_t>(e) * k];
-  if (m.dim == 2) {
-    nf = 3;
-    f[0] = {n[0], n[1], -1};
-    f[1] = {n[1], n[2], -1};
-    f[2] = {n[2], n[0], -1};
-  } else {
-    nf = 4;
-    f[0] = {n[0], n[1], n[2]};
-    f[1] = {n[0], n[1], n[3]};
-    f[2] = {n[0], n[2], n[3]};
-    f[3] = {n[1], n[2], n[3]};
-  }
-}
-
 std::vector<std::array<double, 3>> centroids(const HostMesh& m) {
-  const int ne = m.num_elems(), k = m.nodes_per_elem();
-  std::vector<std::array<double, 3>> c(ne, {0, 0, 0});
-  for (int e = 0; e < ne; ++e) {
-    for (int a = 0; a < k; ++a) {
-      const int n = m.elems[static_cast<size_t>(e) * k + a];
-      for (int d = 0; d < m.dim; ++d) c[e][d] += m.X[static_cast<size_t>(n) * m.dim + d];
-    }
-    for (int d = 0; d < m.dim; ++d) c[e][d] /= k;
-  }
+  std::vector<std::array<double, 3>> c(m.num_elems());
+  for (int e = 0; e < m.num_elems(); ++e) c[e] = mesh_detail::centroid(m, e);
   return c;
 }
 
@@ -169,16 +145,18 @@ ElementGraph element_graph(const HostMesh& m) {
   std::vector<int> uses(m.num_nodes(), 0);
   for (int n : m.elems) ++uses[n];
   std::vector<std::pair<std::array<int, 3>, int>> faces;
-  std::array<std::array<int, 3>, 4> f;
-  int nf = 0;
+  const int k = m.nodes_per_elem();
   for (int e = 0; e < ne; ++e) {
-    element_faces(m, e, f, nf);
-    for (int j = 0; j < nf; ++j) {
+    for (int j = 0; j < mesh_detail::faces_per_elem(m.dim); ++j) {
+      std::array<int, 3> f{-1, -1, -1};
       bool shared = true;
-      for (int a = 0; a < m.dim; ++a) shared = shared && uses[f[j][a]] > 1;
+      for (int a = 0; a < m.dim; ++a) {
+        f[a] = m.elems[static_cast<size_t>(e) * k + mesh_detail::face_node(m.dim, j, a)];
+        shared = shared && uses[f[a]] > 1;
+      }
       if (!shared) continue;
-      std::sort(f[j].begin(), f[j].begin() + m.dim);
-      faces.emplace_back(f[j], e);
+      mesh_detail::sort_face_key(f, m.dim);
+      faces.emplace_back(f, e);
     }
   }
   std::sort(faces.begin(), faces.end());
