@@ -50,40 +50,66 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
   const int dim = mesh.dim;
   const int npe = dim + 1;
   const int ne = mesh.num_elems();
+  const int nn = mesh.num_nodes();
+  // The faces by their sorted node ids: a counting sort by the first (smallest) id, then each
+  // bucket (a few dozen faces around one node) by the other two ids, stably: equal keys stay in
+  // element order. Linear in the faces, no sort of all of them.
   struct Entry {
-    std::array<int, 3> key;
-    int elem, face;
+    int k1, k2, ef;  // second and third node id (-1 in 2D), e * npe + f
   };
-  std::vector<Entry> faces;
-  faces.reserve(static_cast<std::size_t>(ne) * npe);
+  const std::size_t nfaces = static_cast<std::size_t>(ne) * npe;
+  std::vector<int> start(static_cast<std::size_t>(nn) + 1, 0);
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
       std::array<int, 3> k{-1, -1, -1};
-      for (int a = 0; a < dim; ++a)
-        k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+      for (int a = 0; a < dim; ++a) k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
       sort_face_key(k, dim);
-      faces.push_back({k, e, f});
+      if (k[0] < 0 || k[0] >= nn) throw InputError("insert_interfaces: element " + std::to_string(e) + " has a node out of range");
+      ++start[static_cast<std::size_t>(k[0]) + 1];
     }
-  std::sort(faces.begin(), faces.end(), [](const Entry& a, const Entry& b) {
-    return a.key != b.key ? a.key < b.key : a.elem < b.elem;
-  });
-  std::vector<int> neighbour(static_cast<std::size_t>(ne) * npe, -1);
-  for (std::size_t i = 0; i < faces.size();) {
-    std::size_t j = i + 1;
-    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
-    if (j - i > 2) {
-      const auto c = centroid(mesh, faces[i].elem);
-      throw InputError("insert_interfaces: a face of element " + std::to_string(faces[i].elem) +
-                       " (centroid (" + fmt(c[0]) + ", " + fmt(c[1]) +
-                       (dim == 3 ? ", " + fmt(c[2]) : std::string()) + ")) is shared by " +
-                       std::to_string(j - i) + " elements (non-manifold mesh)");
-    }
-    if (j - i == 2) {
-      neighbour[static_cast<std::size_t>(faces[i].elem) * npe + faces[i].face] = faces[i + 1].elem;
-      neighbour[static_cast<std::size_t>(faces[i + 1].elem) * npe + faces[i + 1].face] = faces[i].elem;
-    }
-    i = j;
+  for (int i = 0; i < nn; ++i) start[i + 1] += start[i];
+  std::vector<Entry> faces(nfaces);
+  {
+    std::vector<int> at(start.begin(), start.end() - 1);
+    for (int e = 0; e < ne; ++e)
+      for (int f = 0; f < npe; ++f) {
+        std::array<int, 3> k{-1, -1, -1};
+        for (int a = 0; a < dim; ++a) k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+        sort_face_key(k, dim);
+        faces[at[k[0]]++] = {k[1], k[2], e * npe + f};
+      }
   }
+  auto before = [](const Entry& a, const Entry& b) { return a.k1 != b.k1 ? a.k1 < b.k1 : a.k2 < b.k2; };
+  for (int i = 0; i < nn; ++i) {
+    if (start[i + 1] - start[i] > 64) {
+      std::stable_sort(faces.begin() + start[i], faces.begin() + start[i + 1], before);
+      continue;
+    }
+    for (int j = start[i] + 1; j < start[i + 1]; ++j) {  // insertion sort (stable)
+      const Entry x = faces[j];
+      int q = j;
+      for (; q > start[i] && before(x, faces[q - 1]); --q) faces[q] = faces[q - 1];
+      faces[q] = x;
+    }
+  }
+  std::vector<int> neighbour(nfaces, -1);
+  for (int o = 0; o < nn; ++o)
+    for (int i = start[o]; i < start[o + 1];) {
+      int j = i + 1;
+      while (j < start[o + 1] && faces[j].k1 == faces[i].k1 && faces[j].k2 == faces[i].k2) ++j;
+      if (j - i > 2) {
+        const int e = faces[i].ef / npe;
+        const auto c = centroid(mesh, e);
+        throw InputError("insert_interfaces: a face of element " + std::to_string(e) + " (centroid (" +
+                         fmt(c[0]) + ", " + fmt(c[1]) + (dim == 3 ? ", " + fmt(c[2]) : std::string()) +
+                         ")) is shared by " + std::to_string(j - i) + " elements (non-manifold mesh)");
+      }
+      if (j - i == 2) {
+        neighbour[faces[i].ef] = faces[i + 1].ef / npe;
+        neighbour[faces[i + 1].ef] = faces[i].ef / npe;
+      }
+      i = j;
+    }
   return neighbour;
 }
 

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "kernels/host_loops.hpp"
 #include "solver/state_io.hpp"
 
 namespace fdem {
@@ -42,12 +43,12 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   ni_ = mesh.num_ifaces();
   ne_ = mesh.num_elems();
   set_law(c, mesh);
-  const ContactFaces faces = contact_faces<D>(c, mesh);
+  ContactFaces faces = contact_faces<D>(c, mesh);
   nf_ = faces.nf;
-  const FaceShares shares = face_shares<D>(mesh, faces, D == 2 ? c.thickness : 1.0);
-  potential_area_ = shares.area;
+  FaceShares shares = face_shares<D>(mesh, faces, D == 2 ? c.thickness : 1.0);
   stable_ = contact_stable_step(shares.area, mass);
-  const HostVertexGroups groups = vertex_groups<D>(mesh);
+  potential_area_ = std::move(shares.area);
+  HostVertexGroups groups = vertex_groups<D>(mesh);
   bodies_ = count_bodies(mesh);
   may_meet_ = bodies_ > 1;
   upload(faces, shares, groups, m);
@@ -102,39 +103,36 @@ double ContactSystem<D>::contact_stable_step(const std::vector<double>& area,
   return dt;
 }
 
+// Device copies of the host topology; each host array is freed once copied (the set-up's peak
+// memory holds the device arrays and what is left of the host ones, not both in full).
 template <int D>
-void ContactSystem<D>::upload(const ContactFaces& F, const FaceShares& H, const HostVertexGroups& G,
-                              const Model<D>& m) {
-  auto upload_int = [](const std::vector<int>& v, const char* name) {
-    Kokkos::View<int*> d(std::string(name), v.size());
-    auto h = mirror(d);
-    for (size_t i = 0; i < v.size(); ++i) h(i) = v[i];
+void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m) {
+  auto fill = [](auto& d, auto&& at) {  // d(i) = at(i) for every entry, on the host's threads
+    auto h = Kokkos::create_mirror_view(d);  // d itself on a host backend
+    host_for("fdem::contact::upload", static_cast<int>(h.extent(0)), [&](const int i) { at(h, i); });
     Kokkos::deep_copy(d, h);
+  };
+  auto upload_int = [&fill](std::vector<int>& v, const char* name) {
+    Kokkos::View<int*> d(Kokkos::view_alloc(Kokkos::WithoutInitializing, std::string(name)), v.size());
+    fill(d, [&v](const auto& h, int i) { h(i) = v[i]; });
+    std::vector<int>().swap(v);
     return d;
   };
-  surf_.fnode = Kokkos::View<int* [D]>("fdem::contact::fnode", nf_);
-  {
-    auto h = mirror(surf_.fnode);
-    for (int f = 0; f < nf_; ++f)
-      for (int a = 0; a < D; ++a) h(f, a) = F.fnode[static_cast<size_t>(f) * D + a];
-    Kokkos::deep_copy(surf_.fnode, h);
-  }
+  surf_.fnode = Kokkos::View<int* [D]>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fnode"), nf_);
+  fill(surf_.fnode, [&F](const auto& h, int f) {
+    for (int a = 0; a < D; ++a) h(f, a) = F.fnode[static_cast<size_t>(f) * D + a];
+  });
+  std::vector<int>().swap(F.fnode);
   surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
-  surf_.fshare = Kokkos::View<double*>("fdem::contact::fshare", nf_);
-  {
-    auto h = mirror(surf_.fshare);
-    for (int f = 0; f < nf_; ++f) h(f) = H.share[f];
-    Kokkos::deep_copy(surf_.fshare, h);
-  }
+  surf_.fshare = Kokkos::View<double*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fshare"), nf_);
+  fill(surf_.fshare, [&H](const auto& h, int f) { h(f) = H.share[f]; });
+  std::vector<double>().swap(H.share);
   surf_.factive = Kokkos::View<int*>("fdem::contact::factive", nf_);
   surf_.nfoff = upload_int(H.nfoff, "fdem::contact::nfoff");
   surf_.nface = upload_int(H.nface, "fdem::contact::nface");
   surf_.vgrp = upload_int(G.vgrp, "fdem::contact::vgrp");
-  {
-    std::vector<int> id(nn_);
-    std::iota(id.begin(), id.end(), 0);
-    surf_.clus = upload_int(id, "fdem::contact::clus");
-  }
+  surf_.clus = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::clus"), nn_);
+  fill(surf_.clus, [](const auto& h, int i) { h(i) = i; });
   surf_.fiface = upload_int(F.fiface, "fdem::contact::fiface");
   surf_.nb = F.nb;
   surf_.narea = Kokkos::View<double*>("fdem::contact::narea", nn_);
@@ -155,29 +153,52 @@ void ContactSystem<D>::upload(const ContactFaces& F, const FaceShares& H, const 
   filter_.clus = surf_.clus;
 }
 
-// Work arrays: active faces, surface nodes, positions at the last build, cell grid, pair offsets.
+// Work arrays: active faces, surface nodes, positions at the last build, pair offsets. The cell
+// grids and the arrays of the local list update are sized when first needed (ensure_grid,
+// ensure_update_arrays): a grid needs a few cells per active face, not per face that may ever
+// become active, and a run in which no interface fails never updates its lists.
 template <int D>
 void ContactSystem<D>::allocate_work() {
   afaces_ = Kokkos::View<int*>("fdem::contact::afaces", nf_);
   slaves_ = Kokkos::View<int*>("fdem::contact::nodes", nn_);
   mark_ = Kokkos::View<int*>("fdem::contact::mark", nn_);
   xb_ = Kokkos::View<double* [D]>("fdem::contact::xb", nn_);
-  cell_cap_ = std::max<long>(64, 4L * nf_);
-  grid_.count = Kokkos::View<int*>("fdem::contact::cell_count", cell_cap_);
-  grid_.offset = Kokkos::View<int*>("fdem::contact::cell_offset", cell_cap_ + 1);
-  grid_.faces = Kokkos::View<int*>("fdem::contact::cell_faces", nf_);
-  tgrid_.count = Kokkos::View<int*>("fdem::contact::tcell_count", cell_cap_);
-  tgrid_.offset = Kokkos::View<int*>("fdem::contact::tcell_offset", cell_cap_ + 1);
-  tgrid_.faces = Kokkos::View<int*>("fdem::contact::tcell_faces", nf_);
+  cell_cap_ = std::max<long>(64, 4L * nf_);  // the most cells a grid may have (grid_geometry)
+  for (PairList<D>* p : {&cur_, &next_}) p->off = Kokkos::View<int*>("fdem::contact::pair_off", nn_ + 1);
+  pass_ = Kokkos::View<ContactSums>("fdem::contact::pass");
+  status_ = Kokkos::View<ContactStatus>(std::string(kContactSyncLabel) + "::status");
+}
+
+namespace {
+
+// Room for n entries in v (grown by half again when it grows; contents not kept, not initialised:
+// the grids count and fill what they use).
+void ensure_ints(Kokkos::View<int*>& v, long n, const char* label) {
+  if (static_cast<long>(v.extent(0)) >= n) return;
+  const long cap = std::min<long>(std::numeric_limits<int>::max(), n + n / 2 + 64);
+  v = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, std::string(label)), cap);
+}
+
+}  // namespace
+
+// Room in grid g for its g.ncell cells and nfaces faces (g.ncell from grid_geometry).
+template <int D>
+void ContactSystem<D>::ensure_grid(CellGrid<D>& g, int nfaces, bool touched) {
+  ensure_ints(g.count, g.ncell, touched ? "fdem::contact::tcell_count" : "fdem::contact::cell_count");
+  ensure_ints(g.offset, g.ncell + 1L, touched ? "fdem::contact::tcell_offset" : "fdem::contact::cell_offset");
+  ensure_ints(g.faces, std::max(nfaces, 1), touched ? "fdem::contact::tcell_faces" : "fdem::contact::cell_faces");
+}
+
+// The arrays of the local list update (update_lists), at the first handover with lists.
+template <int D>
+void ContactSystem<D>::ensure_update_arrays() {
+  if (tnode_.extent(0) > 0) return;
   before_.mark = Kokkos::View<int*>("fdem::contact::mark_before", nn_);
   before_.clus = Kokkos::View<int*>("fdem::contact::clus_before", nn_);
   before_.factive = Kokkos::View<int*>("fdem::contact::factive_before", nf_);
   tnode_ = Kokkos::View<int*>("fdem::contact::tnode", nn_);
   tface_ = Kokkos::View<int*>("fdem::contact::tface", nf_);
   tlist_ = Kokkos::View<int*>("fdem::contact::tlist", nf_);
-  for (PairList<D>* p : {&cur_, &next_}) p->off = Kokkos::View<int*>("fdem::contact::pair_off", nn_ + 1);
-  pass_ = Kokkos::View<ContactSums>("fdem::contact::pass");
-  status_ = Kokkos::View<ContactStatus>(std::string(kContactSyncLabel) + "::status");
 }
 
 template <int D>
@@ -207,7 +228,10 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
   handed_ += n;
   // the lists are valid and the build positions known for every node: a local update will do
   const bool lists = may_meet_ && !need_build_ && xb_all_ && builds_ > 0 && ns_ > 0 && na_ > 0;
-  if (lists) save_surfaces<D>(mark_, surf_, before_, nn_, nf_);
+  if (lists) {
+    ensure_update_arrays();
+    save_surfaces<D>(mark_, surf_, before_, nn_, nf_);
+  }
   may_meet_ = true;
   refresh_surfaces(m);
   if (lists) update_lists(m);
@@ -235,9 +259,11 @@ void ContactSystem<D>::update_lists(const Model<D>& m) {
   for (int k = 0; k < D; ++k) finite = finite && std::isfinite(box.lo[k]) && std::isfinite(box.hi[k]);
   if (!finite) return;
   grid_geometry<D>(grid_, box, radius, cell_cap_);
+  ensure_grid(grid_, na_, false);
   grid_bin<D>(grid_, L.S);
   tgrid_.geo = grid_.geo;
   tgrid_.ncell = grid_.ncell;
+  ensure_grid(tgrid_, nt, true);
   SearchSet<D> T = L.S;
   T.faces = tlist_;
   T.nf = nt;
@@ -279,9 +305,10 @@ void ContactSystem<D>::build(const Model<D>& m) {
     return;
   }
   grid_geometry<D>(grid_, box, radius, cell_cap_);
+  ensure_grid(grid_, na_, false);
   grid_bin<D>(grid_, S);
   const int total = candidates_count<D>(grid_, S, filter_, next_.off, nn_);
-  if (total > next_.capacity)  // grow with headroom (the only allocation during a run)
+  if (total > next_.capacity)  // grow with headroom (like the grids: allocations during a run)
     reserve_pairs(next_,
                   static_cast<int>(std::min<long>(std::numeric_limits<int>::max(), 3L * total / 2 + 64)));
   candidates_fill<D>(grid_, S, filter_, next_.off, next_.face);

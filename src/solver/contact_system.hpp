@@ -135,8 +135,10 @@ class ContactSystem {
   // contact springs' stable step; device copies of the topology; work arrays.
   void set_law(const Case& c, const HostMesh& mesh);
   double contact_stable_step(const std::vector<double>& area, const std::vector<double>& mass) const;
-  void upload(const ContactFaces& F, const FaceShares& H, const HostVertexGroups& G, const Model<D>& m);
+  void upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m);
   void allocate_work();
+  void ensure_grid(CellGrid<D>& g, int nfaces, bool touched);
+  void ensure_update_arrays();
   // Recomputes active faces, clusters, surface nodes and contact areas (from m.icontact).
   void refresh_surfaces(const Model<D>& m);
   // After a handover (surfaces refreshed; before_: the surfaces of the lists): the lists updated by

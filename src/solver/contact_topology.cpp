@@ -217,29 +217,37 @@ HostVertexGroups vertex_groups(const HostMesh& mesh) {
     for (int k = 0; k < D; ++k)
       uf.join(mesh.ifaces[static_cast<size_t>(q) * 2 * D + k], mesh.ifaces[static_cast<size_t>(q) * 2 * D + D + k]);
   for (int i = 0; i < nn; ++i) vgrp[i] = uf.find(i);
-  // groups that have interface pairs: their entries (q * D + k) and their copies
+  // groups that have interface pairs (numbered by first appearance): their entries (q * D + k,
+  // in that order) and their copies (ascending), by counting: two passes, no list per group
   std::vector<int> gid(nn, -1);
-  std::vector<std::vector<int>> ent, cop;
+  int ng = 0;
+  G.off.assign(1, 0);
   for (int q = 0; q < ni; ++q)
     for (int k = 0; k < D; ++k) {
       const int r = vgrp[mesh.ifaces[static_cast<size_t>(q) * 2 * D + k]];
       if (gid[r] < 0) {
-        gid[r] = static_cast<int>(ent.size());
-        ent.emplace_back();
-        cop.emplace_back();
+        gid[r] = ng++;
+        G.off.push_back(0);
       }
-      ent[gid[r]].push_back(q * D + k);
+      ++G.off[gid[r] + 1];
     }
+  G.n = ng;
+  G.copy_off.assign(ng + 1, 0);
   for (int i = 0; i < nn; ++i)
-    if (gid[vgrp[i]] >= 0) cop[gid[vgrp[i]]].push_back(i);
-  G.n = static_cast<int>(ent.size());
-  G.off.push_back(0);
-  G.copy_off.push_back(0);
-  for (int g = 0; g < G.n; ++g) {
-    G.ent.insert(G.ent.end(), ent[g].begin(), ent[g].end());
-    G.copy.insert(G.copy.end(), cop[g].begin(), cop[g].end());
-    G.off.push_back(static_cast<int>(G.ent.size()));
-    G.copy_off.push_back(static_cast<int>(G.copy.size()));
+    if (gid[vgrp[i]] >= 0) ++G.copy_off[gid[vgrp[i]] + 1];
+  for (int g = 0; g < ng; ++g) {
+    G.off[g + 1] += G.off[g];
+    G.copy_off[g + 1] += G.copy_off[g];
+  }
+  G.ent.assign(G.off[ng], 0);
+  G.copy.assign(G.copy_off[ng], 0);
+  {
+    std::vector<int> at(G.off.begin(), G.off.end() - 1);
+    for (int q = 0; q < ni; ++q)
+      for (int k = 0; k < D; ++k) G.ent[at[gid[vgrp[mesh.ifaces[static_cast<size_t>(q) * 2 * D + k]]]]++] = q * D + k;
+    at.assign(G.copy_off.begin(), G.copy_off.end() - 1);
+    for (int i = 0; i < nn; ++i)
+      if (gid[vgrp[i]] >= 0) G.copy[at[gid[vgrp[i]]]++] = i;
   }
   return G;
 }
