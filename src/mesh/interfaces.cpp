@@ -62,9 +62,11 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
       std::array<int, 3> k{-1, -1, -1};
-      for (int a = 0; a < dim; ++a) k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+      for (int a = 0; a < dim; ++a)
+        k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
       sort_face_key(k, dim);
-      if (k[0] < 0 || k[0] >= nn) throw InputError("insert_interfaces: element " + std::to_string(e) + " has a node out of range");
+      if (k[0] < 0 || k[0] >= nn)
+        throw InputError("insert_interfaces: element " + std::to_string(e) + " has a node out of range");
       ++start[static_cast<std::size_t>(k[0]) + 1];
     }
   for (int i = 0; i < nn; ++i) start[i + 1] += start[i];
@@ -74,7 +76,8 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
     for (int e = 0; e < ne; ++e)
       for (int f = 0; f < npe; ++f) {
         std::array<int, 3> k{-1, -1, -1};
-        for (int a = 0; a < dim; ++a) k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+        for (int a = 0; a < dim; ++a)
+          k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
         sort_face_key(k, dim);
         faces[at[k[0]]++] = {k[1], k[2], e * npe + f};
       }

@@ -107,7 +107,7 @@ double ContactSystem<D>::contact_stable_step(const std::vector<double>& area,
 // memory holds the device arrays and what is left of the host ones, not both in full).
 template <int D>
 void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m) {
-  auto fill = [](auto& d, auto&& at) {  // d(i) = at(i) for every entry, on the host's threads
+  auto fill = [](auto& d, auto&& at) {       // d(i) = at(i) for every entry, on the host's threads
     auto h = Kokkos::create_mirror_view(d);  // d itself on a host backend
     host_for("fdem::contact::upload", static_cast<int>(h.extent(0)), [&](const int i) { at(h, i); });
     Kokkos::deep_copy(d, h);
@@ -118,20 +118,23 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
     std::vector<int>().swap(v);
     return d;
   };
-  surf_.fnode = Kokkos::View<int* [D]>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fnode"), nf_);
+  surf_.fnode =
+      Kokkos::View<int* [D]>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fnode"), nf_);
   fill(surf_.fnode, [&F](const auto& h, int f) {
     for (int a = 0; a < D; ++a) h(f, a) = F.fnode[static_cast<size_t>(f) * D + a];
   });
   std::vector<int>().swap(F.fnode);
   surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
-  surf_.fshare = Kokkos::View<double*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fshare"), nf_);
+  surf_.fshare =
+      Kokkos::View<double*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fshare"), nf_);
   fill(surf_.fshare, [&H](const auto& h, int f) { h(f) = H.share[f]; });
   std::vector<double>().swap(H.share);
   surf_.factive = Kokkos::View<int*>("fdem::contact::factive", nf_);
   surf_.nfoff = upload_int(H.nfoff, "fdem::contact::nfoff");
   surf_.nface = upload_int(H.nface, "fdem::contact::nface");
   surf_.vgrp = upload_int(G.vgrp, "fdem::contact::vgrp");
-  surf_.clus = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::clus"), nn_);
+  surf_.clus =
+      Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::clus"), nn_);
   fill(surf_.clus, [](const auto& h, int i) { h(i) = i; });
   surf_.fiface = upload_int(F.fiface, "fdem::contact::fiface");
   surf_.nb = F.nb;
@@ -186,7 +189,8 @@ template <int D>
 void ContactSystem<D>::ensure_grid(CellGrid<D>& g, int nfaces, bool touched) {
   ensure_ints(g.count, g.ncell, touched ? "fdem::contact::tcell_count" : "fdem::contact::cell_count");
   ensure_ints(g.offset, g.ncell + 1L, touched ? "fdem::contact::tcell_offset" : "fdem::contact::cell_offset");
-  ensure_ints(g.faces, std::max(nfaces, 1), touched ? "fdem::contact::tcell_faces" : "fdem::contact::cell_faces");
+  ensure_ints(g.faces, std::max(nfaces, 1),
+              touched ? "fdem::contact::tcell_faces" : "fdem::contact::cell_faces");
 }
 
 // The arrays of the local list update (update_lists), at the first handover with lists.

@@ -244,7 +244,8 @@ HostVertexGroups vertex_groups(const HostMesh& mesh) {
   {
     std::vector<int> at(G.off.begin(), G.off.end() - 1);
     for (int q = 0; q < ni; ++q)
-      for (int k = 0; k < D; ++k) G.ent[at[gid[vgrp[mesh.ifaces[static_cast<size_t>(q) * 2 * D + k]]]]++] = q * D + k;
+      for (int k = 0; k < D; ++k)
+        G.ent[at[gid[vgrp[mesh.ifaces[static_cast<size_t>(q) * 2 * D + k]]]]++] = q * D + k;
     at.assign(G.copy_off.begin(), G.copy_off.end() - 1);
     for (int i = 0; i < nn; ++i)
       if (gid[vgrp[i]] >= 0) G.copy[at[gid[vgrp[i]]]++] = i;
