@@ -429,6 +429,12 @@ TEST(CaseErrors, OutOfRangeNamesPathValueAndRange) {
   d["mesh"] = {
       {"generator", "rectangle"}, {"size", {1, 1}}, {"cells", {2, 2}}, {"embedded_diameter", {0, 1}}};
   EXPECT_HAS(error_of(d), "embedded_diameter");
+  // symmetric: a boolean, and only with an embedded diameter
+  d["mesh"] = {{"generator", "disc"}, {"radius", 0.05}, {"element_size", 0.01}, {"symmetric", true}};
+  EXPECT_HAS(error_of(d), "mesh.symmetric: a mesh symmetric about a diameter needs mesh.embedded_diameter");
+  d["mesh"]["embedded_diameter"] = {0, 1};
+  d["mesh"]["symmetric"] = 1;
+  EXPECT_HAS(error_of(d), "mesh.symmetric: must be true or false");
   // zero platen normal
   d = base_doc();
   d["platens"][0]["normal"] = {0, 0};

@@ -676,6 +676,54 @@ TEST(MeshGenerators, DiscEmbeddedDiameterIsAChainOfEdges) {
   EXPECT_EQ(p.elems, p0.elems);
 }
 
+// mesh.symmetric (the Brazilian disc): the mesh is its own mirror image across the embedded
+// diameter, node for node and triangle for triangle, still a conforming disc with the diameter as
+// a chain of edges and the circle as its boundary set.
+TEST(MeshGenerators, DiscSymmetricAboutItsDiameter) {
+  const double R = 0.05, cx = 0.01, cy = -0.02, h = R / 12;
+  const double u[2] = {0.6, 0.8};
+  HostMesh d = fdem::generate_disc(cx, cy, R, h, "body", u[0], u[1], true);
+  EXPECT_NEAR(total_measure(d), kPi * R * R, 0.01 * kPi * R * R);
+  for (int e = 0; e < d.num_elems(); ++e) ASSERT_GT(measure(d, e), 0);
+  const auto mirror = [&](const double* x) {  // reflection across the line through c along u
+    const double s = -(x[0] - cx) * u[1] + (x[1] - cy) * u[0];
+    return std::array<double, 2>{x[0] + 2 * s * u[1], x[1] - 2 * s * u[0]};
+  };
+  const auto key = [&](double x, double y) {  // coordinates on a 1e-9 R lattice
+    return std::make_pair(std::llround(x / (1e-9 * R)), std::llround(y / (1e-9 * R)));
+  };
+  std::map<std::pair<long long, long long>, int> at;
+  for (int i = 0; i < d.num_nodes(); ++i) at[key(node_x(d, i)[0], node_x(d, i)[1])] = i;
+  ASSERT_EQ(static_cast<int>(at.size()), d.num_nodes()) << "two nodes at one place";
+  std::vector<int> image(d.num_nodes(), -1);
+  int on_line = 0;
+  for (int i = 0; i < d.num_nodes(); ++i) {
+    const auto m = mirror(node_x(d, i));
+    auto it = at.find(key(m[0], m[1]));
+    ASSERT_NE(it, at.end()) << "node " << i << " has no mirror image";
+    image[i] = it->second;
+    on_line += image[i] == i;
+  }
+  EXPECT_GE(on_line, static_cast<int>(2 * R / h * 0.8));  // the diameter's nodes are their own images
+  std::set<std::array<int, 3>> tris;
+  for (int e = 0; e < d.num_elems(); ++e) {
+    std::array<int, 3> t{d.elems[3 * e], d.elems[3 * e + 1], d.elems[3 * e + 2]};
+    std::sort(t.begin(), t.end());
+    tris.insert(t);
+  }
+  for (const auto& t : tris) {
+    std::array<int, 3> m{image[t[0]], image[t[1]], image[t[2]]};
+    std::sort(m.begin(), m.end());
+    EXPECT_TRUE(tris.count(m)) << "a triangle without its mirror image";
+  }
+  const auto& bnd = d.node_sets.at("boundary");
+  for (int id : bnd) EXPECT_NEAR(std::hypot(node_x(d, id)[0] - cx, node_x(d, id)[1] - cy), R, 1e-9 * R);
+  EXPECT_EQ(fdem::boundary_faces(d).size(), 2 * bnd.size());  // one closed circle, nothing inside
+  check_boundary_outward(d, {cx, cy, 0});
+  EXPECT_EQ(static_cast<int>(d.node_sets.at("all").size()), d.num_nodes());
+  EXPECT_THROW(fdem::generate_disc(cx, cy, R, h, "body", 0, 0, true), fdem::InputError);
+}
+
 TEST(MeshGenerators, SphereVolumeSets) {
   const double R = 2.0;
   HostMesh s = fdem::generate_sphere({1, 0, -1}, R, R / 5);

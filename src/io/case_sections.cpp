@@ -147,7 +147,7 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});
     else if (g == "disc")
-      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "embedded_diameter"});
+      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "embedded_diameter", "symmetric"});
     else
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
@@ -165,6 +165,12 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
         R.fail(child(P, "embedded_diameter"),
                "the direction is zero (allowed: any non-zero [dx, dy]; it is normalised)");
       s.diameter = {u[0] / len, u[1] / len, 0};
+    }
+    if (g == "disc" && m.contains("symmetric")) {  // optional, not written when absent (same case hash)
+      if (!m["symmetric"].is_boolean()) R.fail(child(P, "symmetric"), "must be true or false");
+      s.symmetric = m["symmetric"].get<bool>();
+      if (s.symmetric && !m.contains("embedded_diameter"))
+        R.fail(child(P, "symmetric"), "a mesh symmetric about a diameter needs mesh.embedded_diameter (its direction)");
     }
   }
   s.region = R.name(m, P, "region", std::string("body"));

@@ -426,7 +426,7 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
       check_fits_in_memory(estimate_gmsh_elements(2, pi * R * R, h), 2,
                            "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m)", h);
     return generate_disc(spec.origin[0], spec.origin[1], spec.radius, spec.element_size, region,
-                         spec.diameter[0], spec.diameter[1]);
+                         spec.diameter[0], spec.diameter[1], spec.symmetric);
   }
   if (spec.kind == "sphere") {
     need_dim(3);

@@ -56,6 +56,7 @@ struct MeshSpec {
   std::array<double, 3> size{0, 0, 0};    // rectangle: width, height; box: lx, ly, lz
   double radius = 0;        // disc, sphere
   std::array<double, 3> diameter{0, 0, 0};  // disc: direction of a diameter meshed as element edges
+  bool symmetric = false;                   // disc: mesh mirror-symmetric about that diameter
                                             // (zero: none)
   std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
   std::string region = "body";            // generators: name of the single region
@@ -81,9 +82,11 @@ HostMesh generate_crossed_rectangle(double x0, double y0, double w, double h, in
                                     const std::string& region = "body");
 // Disc of radius R centred at (cx, cy), unstructured triangles of size h (Gmsh). Node sets:
 // "boundary", "all". A non-zero (dx, dy) also meshes the diameter along that direction as element
-// edges (nodes at both of its ends on the circle), so that a crack can run straight along it.
+// edges (nodes at both of its ends on the circle), so that a crack can run straight along it;
+// with `mirror`, the mesh is also symmetric about that diameter (one half meshed by Gmsh, the
+// other its mirror image), so that a symmetric load sees a symmetric mesh.
 HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region = "body",
-                       double dx = 0, double dy = 0);
+                       double dx = 0, double dy = 0, bool mirror = false);
 // Box of tetrahedra: nx*ny*nz hexahedral cells, each split into 6 tetrahedra (Kuhn). Node sets:
 // xmin/xmax/ymin/ymax/zmin/zmax, "all".
 HostMesh generate_box(const std::array<double, 3>& origin, const std::array<double, 3>& size,
