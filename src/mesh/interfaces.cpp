@@ -58,16 +58,19 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
     int k1, k2, ef;  // second and third node id (-1 in 2D), e * npe + f
   };
   const std::size_t nfaces = static_cast<std::size_t>(ne) * npe;
+  auto key = [&](int e, int f) {  // the sorted node ids of local face f of element e
+    std::array<int, 3> k{-1, -1, -1};
+    for (int a = 0; a < dim; ++a) k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
+    sort_face_key(k, dim);
+    return k;
+  };
   std::vector<int> start(static_cast<std::size_t>(nn) + 1, 0);
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
-      std::array<int, 3> k{-1, -1, -1};
-      for (int a = 0; a < dim; ++a)
-        k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
-      sort_face_key(k, dim);
-      if (k[0] < 0 || k[0] >= nn)
+      const int k0 = key(e, f)[0];
+      if (k0 < 0 || k0 >= nn)
         throw InputError("insert_interfaces: element " + std::to_string(e) + " has a node out of range");
-      ++start[static_cast<std::size_t>(k[0]) + 1];
+      ++start[static_cast<std::size_t>(k0) + 1];
     }
   for (int i = 0; i < nn; ++i) start[i + 1] += start[i];
   std::vector<Entry> faces(nfaces);
@@ -75,10 +78,7 @@ std::vector<int> face_neighbours(const HostMesh& mesh) {
     std::vector<int> at(start.begin(), start.end() - 1);
     for (int e = 0; e < ne; ++e)
       for (int f = 0; f < npe; ++f) {
-        std::array<int, 3> k{-1, -1, -1};
-        for (int a = 0; a < dim; ++a)
-          k[a] = mesh.elems[static_cast<std::size_t>(e) * npe + face_node(dim, f, a)];
-        sort_face_key(k, dim);
+        const std::array<int, 3> k = key(e, f);
         faces[at[k[0]]++] = {k[1], k[2], e * npe + f};
       }
   }
