@@ -147,7 +147,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
     if (g == "sphere")
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "mesher"});
     else if (g == "disc")
-      R.keys(m, P, {"generator", "center", "radius", "element_size", "region", "embedded_diameter", "symmetric"});
+      R.keys(m, P,
+             {"generator", "center", "radius", "element_size", "region", "embedded_diameter", "symmetric"});
     else
       R.keys(m, P, {"generator", "center", "radius", "element_size", "region"});
     s.origin = R.vec(m, P, "center", d, Vec3{0, 0, 0});
@@ -170,7 +171,8 @@ void read_mesh_generator(json& m, Case& c, const Reader& R) {
       if (!m["symmetric"].is_boolean()) R.fail(child(P, "symmetric"), "must be true or false");
       s.symmetric = m["symmetric"].get<bool>();
       if (s.symmetric && !m.contains("embedded_diameter"))
-        R.fail(child(P, "symmetric"), "a mesh symmetric about a diameter needs mesh.embedded_diameter (its direction)");
+        R.fail(child(P, "symmetric"),
+               "a mesh symmetric about a diameter needs mesh.embedded_diameter (its direction)");
     }
   }
   s.region = R.name(m, P, "region", std::string("body"));

@@ -91,7 +91,6 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       gmsh::model::add("half_disc");
       const double a0 = std::atan2(uy, ux), pi = std::acos(-1.0);
       const int arc = gmsh::model::occ::addCircle(cx, cy, 0.0, R, -1, a0, a0 + pi);
-      std::vector<std::pair<int, int>> ends;
       gmsh::model::occ::synchronize();
       gmsh::vectorpair pts;
       gmsh::model::getBoundary({{1, arc}}, pts, false, false, false);
