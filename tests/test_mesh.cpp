@@ -721,6 +721,8 @@ TEST(MeshGenerators, DiscSymmetricAboutItsDiameter) {
   EXPECT_EQ(fdem::boundary_faces(d).size(), 2 * bnd.size());  // one closed circle, nothing inside
   check_boundary_outward(d, {cx, cy, 0});
   EXPECT_EQ(static_cast<int>(d.node_sets.at("all").size()), d.num_nodes());
+  ASSERT_EQ(static_cast<int>(d.node_origin.size()), d.num_nodes());
+  for (int i = 0; i < d.num_nodes(); ++i) ASSERT_EQ(d.node_origin[i], i);
   EXPECT_THROW(fdem::generate_disc(cx, cy, R, h, "body", 0, 0, true), fdem::InputError);
 }
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -33,7 +34,7 @@ namespace {
 // The half disc meshed by Gmsh, reflected across its diameter (through c along the unit vector u):
 // every node off the diameter gets its mirror image, each triangle its mirror with two nodes
 // swapped (positively oriented), each set its mirror images (face set segments reversed: the
-// outer arc keeps its sense). Nodes within 1e-9 R of the diameter are its own images.
+// outer arc keeps its sense). Nodes within 1e-9 R of the diameter are their own images.
 HostMesh mirror_across_diameter(HostMesh half, double cx, double cy, double ux, double uy, double R) {
   const int nn = half.num_nodes(), ne = half.num_elems();
   const double nx = -uy, ny = ux;  // normal of the diameter
@@ -52,6 +53,8 @@ HostMesh mirror_across_diameter(HostMesh half, double cx, double cy, double ux, 
   }
   HostMesh m = std::move(half);
   m.X = std::move(X);
+  m.node_origin.resize(m.num_nodes());  // identity, as extracted meshes have it
+  std::iota(m.node_origin.begin(), m.node_origin.end(), 0);
   m.elems.reserve(2 * m.elems.size());
   for (int e = 0; e < ne; ++e) {
     const int a = m.elems[3 * static_cast<size_t>(e)], b = m.elems[3 * static_cast<size_t>(e) + 1],
