@@ -27,10 +27,6 @@ void check_generator_args(const std::string& who, double R, double h) {
   if (h > R) throw InputError(who + ": element_size " + fmt(h) + " is larger than the radius " + fmt(R));
 }
 
-}  // namespace
-
-namespace {
-
 // The half disc meshed by Gmsh, reflected across its diameter (through c along the unit vector u):
 // every node off the diameter gets its mirror image, each triangle its mirror with two nodes
 // swapped (positively oriented), each set its mirror images (face set segments reversed: the
