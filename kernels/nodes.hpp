@@ -88,6 +88,8 @@ struct NodeUpdate {
   double th;  // velocities live at half steps
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, NodeSums& s) const {
+    // the parameters as locals: the compiler cannot tell that the stores to the Views leave them alone
+    const double dt = p.dt, dtv = p.dtv, alpha = p.alpha, cmass = p.cmass;
     const double mi = mass(i);
     const int bc = node_bc(i);
     for (int k = 0; k < D; ++k) {
@@ -108,23 +110,23 @@ struct NodeUpdate {
       if (bc >= 0 && (bcs(bc).mask >> k & 1)) {
         const double r = bcs(bc).ramp > 0 ? kmin(1.0, th / bcs(bc).ramp) : 1.0;
         vn = bcs(bc).vel[k] * r;
-        s.bc_work += (mi * (vn - vo) / p.dtv - F) * 0.5 * (vo + vn) * p.dtv;
+        s.bc_work += (mi * (vn - vo) / dtv - F) * 0.5 * (vo + vn) * dtv;
       } else if (Damp) {
-        double fd = -p.cmass * mi * vo;
-        if (p.alpha > 0) {
-          const double fu = F + fd;
-          fd -= p.alpha * (fu < 0 ? -fu : fu) * (vo > 0 ? 1.0 : (vo < 0 ? -1.0 : 0.0));
+        double fd = -cmass * mi * vo;
+        if (alpha > 0) {  // without branches on the signs: they are random from node to node
+          const double sign_v = static_cast<double>((vo > 0) - (vo < 0));
+          fd -= alpha * kmath::fabs(F + fd) * sign_v;
         }
-        vn = vo + p.dtv * (F + fd) / mi;
-        s.damping -= fd * 0.5 * (vo + vn) * p.dtv;
+        vn = vo + dtv * (F + fd) / mi;
+        s.damping -= fd * 0.5 * (vo + vn) * dtv;
       } else {
-        vn = vo + p.dtv * F / mi;
+        vn = vo + dtv * F / mi;
       }
       if (Ramp) {
         if (bc >= 0 && (bcs(bc).mask >> k & 1))  // with the reaction's work, as the BC's work counts it
-          s.bc_work += fr * 0.5 * (vo + vn) * p.dtv;
+          s.bc_work += fr * 0.5 * (vo + vn) * dtv;
         else  // over the straight path x(n) -> x(n+1) with the force linear in time on it
-          s.ramp_work += 0.5 * (fr + frn) * vn * p.dt;
+          s.ramp_work += 0.5 * (fr + frn) * vn * dt;
       }
       if (Sample) {
         const double u = x(i, k) - X(i, k);
@@ -134,7 +136,7 @@ struct NodeUpdate {
         s.momentum[k] += 0.5 * mi * (vo + vn);
       }
       v(i, k) = vn;
-      x(i, k) += p.dt * vn;
+      x(i, k) += dt * vn;
       f(i, k) = 0.0;
     }
   }
