@@ -52,7 +52,8 @@ KOKKOS_INLINE_FUNCTION double cohesive_dissipation(const CohesivePoint& s) { ret
 // vector is kss * delta_s_vector. Also returns the damage D.
 KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, double ds,
                                             CohesivePoint& s, double& tn, double& kss, double& D) {
-  const double dnp = dn > 0.0 ? dn : 0.0;
+  // The signs of dn decide selects, not branches (kselect).
+  const double dnp = kselect(dn > 0.0, dn, 0.0);
   const double dm = kmath::sqrt(dnp * dnp + ds * ds);
   if (s.dm0 > 0.0 && p.rescale != 1.0) {
     // The strength (f_t, c, tan(phi)) has been divided by a factor since the last update
@@ -81,7 +82,7 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
     // Undamaged: initiation check on the elastic tractions (tensile failure has priority).
     const double tn_e = p.kn * dn;
     const double ts_e = p.ks * ds;
-    const double sigc = tn_e < 0.0 ? -tn_e : 0.0;
+    const double sigc = kselect(tn_e < 0.0, -tn_e, 0.0);
     const bool tensile = tn_e >= p.ft;
     const bool shear = ts_e >= p.c + sigc * p.tanphi;
     if ((tensile || shear) && dm > 0.0) {
@@ -123,7 +124,7 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
   }
   D = cohesive_damage(s);
   const double g = 1.0 - D;
-  tn = dn > 0.0 ? g * p.kn * dn : p.kn * dn;
+  tn = kselect(dn > 0.0, g, 1.0) * p.kn * dn;  // (1.0 * kn) * dn == kn * dn: the same bits
   kss = g * p.ks;
 }
 

@@ -11,6 +11,8 @@
 //     damage law with one history value per point (written only when it grows), penalty in
 //     compression, no shear;
 //   - nodes: local damping alpha |f| sign(v), leap-frog, no boundary conditions;
+//   - no branch on a sign that changes at random from item to item (damping, the penalty in
+//     compression): selects, as the full step makes them (fdem::kselect);
 //   - the scatter as the full step does it: a duplicated ScatterView on host backends (atomics on
 //     GPUs), one access() per chunk of kChunk elements done with the interfaces whose side A lies
 //     in it (Model::ichunk), then one contribute and a node pass that zeroes the forces.
@@ -145,7 +147,7 @@ struct Yardstick {
           dmg(q, k) = d;
         }
       }
-      const double t = dn > 0 ? (1.0 - d) * kn * dn : kn * dn;
+      const double t = fdem::kselect(dn > 0, 1.0 - d, 1.0) * kn * dn;  // no branch on the sign
       for (int i = 0; i < D; ++i) {
         acc(a, i) += t * A * n[i];
         acc(b, i) -= t * A * n[i];
@@ -182,7 +184,7 @@ struct Yardstick {
           for (int k = 0; k < D; ++k) {
             double fk = ff(i, k);
             const double vk = vv(i, k);
-            fk -= al * (fk > 0 ? fk : -fk) * (vk > 0 ? 1.0 : (vk < 0 ? -1.0 : 0.0));
+            fk -= al * fdem::kmath::fabs(fk) * static_cast<double>((vk > 0) - (vk < 0));  // no branches
             const double vn = vk + h * fk * mi(i);
             vv(i, k) = vn;
             uu(i, k) += h * vn;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include "kernels/cohesive.hpp"
 
@@ -119,6 +120,28 @@ TEST(Cohesive, CompressionRaisesShearStrengthByTanPhi) {
     EXPECT_NEAR(r.peak_ts / (p.c + sigc * p.tanphi), 1.0, 0.005) << "sigma_c " << sigc;
     // shear under compression dissipates the mode II energy (normal part never damages)
     EXPECT_NEAR(r.work / p.Gsc, 1.0, 0.005) << "sigma_c " << sigc;
+  }
+}
+
+// kselect (kernels/fdem_kokkos.hpp) is the branch-free `c ? a : b` of the cohesive law and the
+// node update: it must give the same bits, signed zeros, infinities and NaN payloads included.
+TEST(Cohesive, BranchFreeSelectGivesTheSameBitsAsTheConditional) {
+  const double vals[] = {0.0, -0.0, 1.0, -2.5e-300, 4.9e-324, 1.7e308, -HUGE_VAL, HUGE_VAL, std::nan("7"), 0.1};
+  auto bits = [](double x) {
+    unsigned long long u;
+    std::memcpy(&u, &x, sizeof u);
+    return u;
+  };
+  for (double a : vals)
+    for (double b : vals)
+      for (bool c : {true, false}) EXPECT_EQ(bits(fdem::kselect(c, a, b)), bits(c ? a : b)) << a << " " << b << " " << c;
+  // the traction of a closed point: (1.0 * kn) * dn, the bits of kn * dn
+  const auto p = table1();
+  CohesivePoint h{0, 0, 0, 0};
+  double tn, kss, D;
+  for (double dn : {-3e-9, -1e-12, -0.0}) {
+    fdem::cohesive_update(p, dn, 0.0, h, tn, kss, D);
+    EXPECT_EQ(bits(tn), bits(p.kn * dn)) << dn;
   }
 }
 
