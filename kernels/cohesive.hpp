@@ -131,8 +131,8 @@ KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, 
 // Elastic energy stored per unit area at the current separation.
 KOKKOS_INLINE_FUNCTION double cohesive_stored(const CohesiveParams& p, double dn, double ds, double D) {
   const double g = 1.0 - D;
-  return dn > 0.0 ? 0.5 * (g * p.kn * dn * dn + g * p.ks * ds * ds)
-                  : 0.5 * (p.kn * dn * dn + g * p.ks * ds * ds);
+  return kselect(dn > 0.0, 0.5 * (g * p.kn * dn * dn + g * p.ks * ds * ds),
+                 0.5 * (p.kn * dn * dn + g * p.ks * ds * ds));  // both finite: a select, no branch
 }
 
 }  // namespace fdem
