@@ -270,7 +270,10 @@ class Report:
                "written only when it grows, local damping, the same duplicated scatter, chunks, mesh and "
                "memory order. bench_step times it in the same rounds as the full step, so the ratio "
                f"holds whatever the machine's load (target: at most {YARDSTICK_LIMIT} for the intact step "
-               "at 1e6 elements, issue 19).")
+               "at 1e6 elements, issue 19). Both select rather than branch on the signs of velocities and "
+               "openings, which change at random from item to item in this scene (`kselect`); before "
+               "2026-12-03 both branched, the yardstick more (its node pass and penalty), and the ratios "
+               "were lower for it (1.72 - 2.02 at 1e6): `docs/performance-impact.md` section 1.")
         self.w()
         rows = []
         for dim in (2, 3):
