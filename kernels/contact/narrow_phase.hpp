@@ -170,11 +170,17 @@ struct ContactForcesFn {
   //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
   //    The pairs the later passes visit go to sub; All: every pair gets its scratch (the others
   //    weight 0, no fade, no depth), for a node whose subset overflows.
+  static constexpr int kAhead = 4;
   template <bool All>
   KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D], Subset& sub) const {
     int last_e = -1, last_a = -1;
     double last_d = 0.0;
     for (int j = b; j < e; ++j) {
+#if defined(__GNUC__) && !defined(__CUDA_ARCH__) && !defined(__HIP_DEVICE_COMPILE__)
+      // host CPUs: ask for the face row of a candidate a few ahead (a random row each: the pass
+      // waits on them); GPUs hide the latency with other threads instead
+      if (j + kAhead < e) __builtin_prefetch(&S.fgeo(S.fslot(P.face(j + kAhead)), 0));
+#endif
       const double fn = P.fn(j);
       const bool hist = fn > 0.0 || P.g0(j) < 0.0;
       const int fc = P.face(j);
