@@ -56,8 +56,8 @@ struct MeshSpec {
   std::array<double, 3> size{0, 0, 0};    // rectangle: width, height; box: lx, ly, lz
   double radius = 0;        // disc, sphere
   std::array<double, 3> diameter{0, 0, 0};  // disc: direction of a diameter meshed as element edges
-  bool symmetric = false;                   // disc: mesh mirror-symmetric about that diameter
                                             // (zero: none)
+  bool symmetric = false;                   // disc: mesh mirror-symmetric about that diameter
   std::array<int, 3> cells{0, 0, 0};      // rectangle, box: cells per direction (0: from element_size)
   std::string region = "body";            // generators: name of the single region
   std::string mesher = "delaunay";        // sphere: Gmsh's 3D algorithm, "delaunay" or "hxt"
