@@ -60,7 +60,7 @@ struct InvertedElements {
 template <int D>
 InvertedElements inverted_elements(const Model<D>& m) {
   const ElementInverted<D> inverted{m.x, m.X, m.elem};
-  const int ne = m.ne;
+  const int ne = m.owned_elems();
   int count = 0, first = ne;
   Kokkos::parallel_reduce(
       "fdem::check_inverted", Kokkos::RangePolicy<ExecSpace>(0, ne),

@@ -53,6 +53,11 @@ constexpr int kPlatenForce = 0, kPlatenWork = 3, kPlatenFriction = 4, kPlatenCon
 template <int D>
 struct NodeData {
   int nn = 0;
+  // One part of a decomposed run (src/parallel/decompose.hpp): its first nn_own nodes are its own,
+  // the others ghosts, whose state comes from their owners after each step (src/parallel/halo.hpp):
+  // the node update and its sums cover the own nodes only. -1: all nodes are its own.
+  int nn_own = -1;
+  int owned_nodes() const { return nn_own < 0 ? nn : nn_own; }
   Kokkos::View<double* [D]> X, x, v, f;  // reference, current position, velocity, force
   Kokkos::View<double*> mass;
   Kokkos::View<int*> node_bc;      // -1: free; else index into bcs
@@ -66,6 +71,8 @@ struct NodeData {
 template <int D>
 struct ElementData {
   int ne = 0;
+  int ne_own = -1;  // decomposed run: the own elements come first (energies, checks); -1: all
+  int owned_elems() const { return ne_own < 0 ? ne : ne_own; }
   double thickness = 1.0;  // 2D: out-of-plane thickness; 3D: 1
   bool plane_stress = false;
   Kokkos::View<int* [D + 1]> elem;
@@ -80,6 +87,8 @@ struct ElementData {
 template <int D>
 struct InterfaceData {
   int ni = 0;
+  int ni_own = -1;  // decomposed run: the counted interfaces come first (energies, counts); -1: all
+  int owned_ifaces() const { return ni_own < 0 ? ni : ni_own; }
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][4]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point

@@ -152,7 +152,7 @@ struct NodeUpdateNoSums {
   }
 };
 
-// Update of all nodes. The sums are reduced only when there is something to sum: on sampled
+// Update of the own nodes (all but the ghosts of a decomposed run: NodeData::nn_own). The sums are reduced only when there is something to sum: on sampled
 // steps, or when the scene has damping, velocity BCs or ramped point loads (their work is
 // accumulated every step); otherwise the pass is a plain parallel_for.
 template <int D, bool Sample, bool Damp, bool Ramp>
@@ -163,9 +163,9 @@ NodeSums update_nodes(const Model<D>& m, const NodeUpdateParams& prm_t) {
   NodeSums out;
   const bool reduce = Sample || Damp || Ramp || m.bcs.extent(0) > 0;
   if (reduce) {
-    Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, out);
+    Kokkos::parallel_reduce("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.owned_nodes()), fn, out);
   } else {
-    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.owned_nodes()),
                          NodeUpdateNoSums<NodeUpdate<D, Sample, Damp, Ramp>>{fn});
   }
   return out;
@@ -182,11 +182,11 @@ void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm_t,
   const NodeUpdate<D, false, Damp, Ramp> fn{
       m.x, m.X, m.v, m.f, m.fext, m.fext_ramp, m.mass, m.node_bc, m.bcs, prm, prm.t + 0.5 * prm.dt};
   if (!(Damp || Ramp || m.bcs.extent(0) > 0)) {
-    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.nn),
+    Kokkos::parallel_for("fdem::nodes", Kokkos::RangePolicy<ExecSpace>(0, m.owned_nodes()),
                          NodeUpdateNoSums<NodeUpdate<D, false, Damp, Ramp>>{fn});
     return;
   }
-  Kokkos::parallel_reduce("fdem::nodes [device]", Kokkos::RangePolicy<ExecSpace>(0, m.nn), fn, sums);
+  Kokkos::parallel_reduce("fdem::nodes [device]", Kokkos::RangePolicy<ExecSpace>(0, m.owned_nodes()), fn, sums);
   auto s = sums;
   auto w = work;
   Kokkos::parallel_for(

@@ -16,7 +16,7 @@ double strain_energy(const Model<D>& m) {
   const ElementData<D> el = m;
   double w = 0;
   Kokkos::parallel_reduce(
-      "fdem::strain_energy", Kokkos::RangePolicy<ExecSpace>(0, m.ne),
+      "fdem::strain_energy", Kokkos::RangePolicy<ExecSpace>(0, m.owned_elems()),
       KOKKOS_LAMBDA(const int e, double& s) {
         double xe[D + 1][D], G[D][D], F[D][D], S[D][D];
         gather_element<D>(x, el, e, xe, G);
@@ -58,7 +58,7 @@ InterfaceSums interface_state(const Model<D>& m) {
   const InterfaceData<D> in = m;
   InterfaceSums out;
   Kokkos::parallel_reduce(
-      "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.ni),
+      "fdem::interface_state", Kokkos::RangePolicy<ExecSpace>(0, m.owned_ifaces()),
       KOKKOS_LAMBDA(const int q, InterfaceSums& s) {
         double xa[D][D], xb[D][D], n[D], ap;
         gather_interface<D>(x, in.iface, q, xa, xb);

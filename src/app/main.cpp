@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -18,13 +19,25 @@
 #include "common/error.hpp"
 #include "common/kernel_times.hpp"
 #include "fdem_version.hpp"
+#include "parallel/comm.hpp"
 #include "parallel/partition.hpp"
 #include "solver/run.hpp"
+#ifdef FDEM_HAVE_MPI
+#include "parallel/mpi/comm_mpi.hpp"
+#endif
 
 namespace {
 
+// The processes of an MPI run (an MPI build under mpirun; null otherwise).
+std::shared_ptr<fdem::Comm> g_comm;
+
 void print_info() {
   std::printf("fdem %s\n", FDEM_VERSION_STRING);
+#ifdef FDEM_HAVE_MPI
+  std::printf("MPI: %s\n", fdem::mpi_description(*g_comm).c_str());
+#else
+  std::printf("MPI: not in this build (cmake -DFDEM_ENABLE_MPI=ON; docs/parallel.md); processes: 1\n");
+#endif
   std::printf("Kokkos %d.%d.%d\n", KOKKOS_VERSION / 10000, (KOKKOS_VERSION / 100) % 100,
               KOKKOS_VERSION % 100);
   std::printf("default execution space: %s\n", Kokkos::DefaultExecutionSpace::name());
@@ -184,6 +197,16 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
 }
 
+// A run over several processes that fails on one must end them all (the others would wait for it
+// at the next exchange): MPI_Abort with the exit status. One process: the status.
+int stop_all(int status) {
+  if (g_comm && g_comm->size() > 1) g_comm->abort(status);
+  return status;
+}
+std::string process_prefix() {
+  return g_comm && g_comm->size() > 1 ? "process " + std::to_string(g_comm->rank()) + ": " : "";
+}
+
 // Runs the chosen subcommand; returns the exit status (see the top of this file).
 int dispatch(const CLI::App& app, const CliOptions& o) {
   try {
@@ -204,6 +227,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       opt.checkpoint_every = o.checkpoint_every;
       opt.restart = o.restart;
       opt.interrupt = &g_interrupt;
+      if (g_comm && g_comm->size() > 1) opt.comm = g_comm;
       if (o.kernel_times) fdem::kernel_times::enable();
       const auto summary = fdem::run_case(o.case_path, opt);
       if (o.kernel_times) fdem::kernel_times::print();
@@ -214,14 +238,15 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
     std::string msg = e.what();
     if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos)
       msg = o.case_path + ": " + msg;
-    std::cerr << "error: " << msg << "\n";
-    return 2;
+    // over several processes every one reads the same input and fails alike: process 0 says it
+    if (!g_comm || g_comm->rank() == 0) std::cerr << "error: " << msg << "\n";
+    return stop_all(2);
   } catch (const fdem::NumericalError& e) {
-    std::cerr << "numerical failure: " << e.what() << "\n";
-    return 3;
+    std::cerr << process_prefix() << "numerical failure: " << e.what() << "\n";
+    return stop_all(3);
   } catch (const std::exception& e) {
-    std::cerr << "unexpected error: " << e.what() << "\n";
-    return 1;
+    std::cerr << process_prefix() << "unexpected error: " << e.what() << "\n";
+    return stop_all(1);
   }
   return 0;
 }
@@ -249,7 +274,18 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
-  Kokkos::ScopeGuard guard(argc, argv);
-  if (app.got_subcommand("run")) watch_interrupts();
-  return dispatch(app, opts);
+#ifdef FDEM_HAVE_MPI
+  g_comm = fdem::mpi_start(&argc, &argv);  // before Kokkos, which may pick a GPU per process
+#endif
+  int status = 0;
+  {
+    Kokkos::ScopeGuard guard(argc, argv);
+    if (app.got_subcommand("run")) watch_interrupts();
+    status = dispatch(app, opts);
+  }
+#ifdef FDEM_HAVE_MPI
+  g_comm.reset();
+  fdem::mpi_finish();  // after Kokkos
+#endif
+  return status;
 }

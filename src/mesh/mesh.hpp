@@ -38,6 +38,9 @@ struct HostMesh {
   std::vector<std::string> warnings;
   // Bodies (elements joined through shared nodes) before interface insertion (check_bodies).
   int bodies = 0;
+  // One part of a decomposed mesh (src/parallel/decompose.hpp): its first owned_nodes nodes,
+  // owned_elems elements and owned_ifaces interfaces are its own, the rest ghosts. -1: a whole mesh.
+  int owned_nodes = -1, owned_elems = -1, owned_ifaces = -1;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

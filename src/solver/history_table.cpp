@@ -129,7 +129,7 @@ template <int D>
 void HistoryTable<D>::write_row(const Simulation<D>& sim) {
   last_ = sim.energies();
   const std::vector<double> row = make_row(sim);
-  file_->row(row);
+  if (file_) file_->row(row);  // not opened on the processes that do not write (a run over several)
   rows_.insert(rows_.end(), row.begin(), row.end());
   check_balance(last_);
 }

@@ -297,6 +297,19 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   m.nn = mesh.num_nodes();
   m.ne = mesh.num_elems();
   m.ni = mesh.num_ifaces();
+  if (mesh.owned_nodes >= 0) {  // one part of a decomposed run (src/parallel/decompose.hpp)
+    m.nn_own = mesh.owned_nodes;
+    m.ne_own = mesh.owned_elems;
+    m.ni_own = mesh.owned_ifaces;
+    // A point load is shared by its set's nodes, which a part holds only some of; contact across
+    // parts needs ghost surfaces: neither is there yet (docs/parallel.md).
+    if (!c.point_loads.empty())
+      throw InputError(c.file + ": point_loads: not yet available in a run over several processes "
+                       "(docs/parallel.md)");
+    if (contact_wanted(c, mesh))
+      throw InputError(c.file + ": contact: contact across processes is not available yet (docs/parallel.md); "
+                       "a run over several processes needs \"contact\": {\"enabled\": false}");
+  }
   m.thickness = D == 2 ? c.thickness : 1.0;
   m.plane_stress = D == 2 && c.plane_stress;
 

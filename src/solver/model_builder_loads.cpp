@@ -44,6 +44,10 @@ void build_boundary_areas(const HostMesh& mesh, Model<D>& m) {
     }
     for (int k = 0; k < D; ++k) area[faces[fi * D + k]] += meas / D;
   }
+  // one part of a decomposed run: the platens act on its own nodes (the ghosts take their owners'
+  // state), whose boundary faces it holds all of (src/parallel/decompose.hpp)
+  if (mesh.owned_nodes >= 0)
+    for (auto it = area.begin(); it != area.end();) it = it->first >= mesh.owned_nodes ? area.erase(it) : ++it;
   m.nb = static_cast<int>(area.size());
   m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
   m.barea = Kokkos::View<double*>("fdem::barea", m.nn);

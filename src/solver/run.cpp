@@ -11,6 +11,9 @@
 #include "io/output.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
+#include "parallel/comm.hpp"
+#include "parallel/decompose.hpp"
+#include "parallel/partition.hpp"
 #include "solver/homogenise.hpp"
 #include "solver/interface_materials.hpp"
 #include "solver/run_loop.hpp"
@@ -115,9 +118,54 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 }  // namespace
 
+namespace {
+
+// A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
+// refused, naming the key; every process meshes and partitions the case alike and runs its part;
+// process 0 alone touches the output folder.
+nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt) {
+  const Comm& comm = *opt.comm;
+  const std::string why = " is not available yet in a run over several processes (docs/parallel.md)";
+  if (!opt.restart.empty()) throw InputError("--restart" + why);
+  if (opt.checkpoint_every > 0 || (opt.checkpoint_every < 0 && c.checkpoint_every > 0))
+    throw InputError(c.file + ": output.checkpoint_every (checkpoints)" + why + "; set it to 0");
+  if (c.snapshot_interval > 0)
+    throw InputError(c.file + ": output.snapshot_count (snapshots)" + why + "; set it to 0");
+  if (!c.monitors.empty()) throw InputError(c.file + ": monitors" + why);
+  const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
+  std::unique_ptr<OutputLock> lock;
+  if (comm.rank() == 0) {
+    ensure_output_dir(out);
+    lock = std::make_unique<OutputLock>(out);
+    refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
+  }
+  HostMesh mesh = prepare_mesh(c);
+  if (c.output_fragments && mesh.num_ifaces() > 0)
+    throw InputError(c.file + ": output.fragments (the fragment analysis)" + why + "; set it to false");
+  const RunIdentity id{case_hash(c), mesh_hash(mesh)};
+  if (comm.rank() == 0) remove_old_outputs(out);
+  resolve_defaults(c, mesh);
+  if (comm.rank() == 0) write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  // the same partition on every process (deterministic); each keeps its own part
+  const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
+  SubMesh part;
+  {
+    setup_times::Phase phase("decomposition");
+    std::vector<SubMesh> parts = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size());
+    part = std::move(parts[comm.rank()]);
+  }
+  RunOptions o = opt;
+  o.progress = opt.progress && comm.rank() == 0;
+  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, nullptr, &part)
+                    : run_dim<3>(c, std::move(mesh), out, o, id, nullptr, &part);
+}
+
+}  // namespace
+
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   setup_times::reset();
   Case c = load_case(case_path, opt.overrides);
+  if (opt.comm && opt.comm->size() > 1) return run_over_processes(case_path, c, opt);
   if (!std::isfinite(opt.checkpoint_every))  // NaN too
     throw InputError("--checkpoint-every must be a finite time in seconds");
   StateArrays restart;

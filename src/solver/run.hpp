@@ -1,6 +1,7 @@
 #pragma once
 // Host orchestration of a run: case -> mesh -> interfaces -> device model -> time loop -> output.
 #include <csignal>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,7 @@ namespace fdem {
 
 struct Case;
 struct HostMesh;
+class Comm;
 
 struct RunOptions {
   std::string out_dir;                // default: ./out/<case name>
@@ -21,6 +23,11 @@ struct RunOptions {
   // step on the host; the run then ends after the step with a checkpoint and summary.json (stop
   // reason "interrupted", "signal" the number). Null: not watched.
   const volatile std::sig_atomic_t* interrupt = nullptr;
+  // The processes of a run under mpirun (an MPI build's main sets it; src/parallel/comm.hpp).
+  // With more than one, each process meshes the case, partitions it (METIS, else coordinate
+  // bisection), runs its part (src/parallel/decompose.hpp) and process 0 writes the outputs
+  // (docs/parallel.md: what such a run does not do yet is refused with the key to change).
+  std::shared_ptr<const Comm> comm;
 };
 
 // Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,

@@ -16,7 +16,7 @@ double seconds(std::chrono::steady_clock::duration d) { return std::chrono::dura
 
 template <int D>
 RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                    const RunIdentity& id, const StateArrays* restart)
+                    const RunIdentity& id, const StateArrays* restart, const SubMesh* part)
     : c_(c),
       mesh_(std::make_unique<HostMesh>(std::move(mesh))),
       out_(out),
@@ -25,9 +25,13 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
       restart_(restart),
       wall0_(Clock::now()),
       loop0_(wall0_),
-      sim_(c, *mesh_),
+      sim_(c, part ? part->mesh : *mesh_),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
+  if (part) {
+    sim_.set_decomposition(opt.comm, *part);
+    writes_ = opt.comm->rank() == 0;
+  }
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
@@ -36,7 +40,7 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   if (restart) {
     restore(*restart);
   } else {
-    history_->open(out, false);
+    if (writes_) history_->open(out, false);
     if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr);
   }
@@ -71,6 +75,12 @@ void RunLoop<D>::announce() const {
                "%.0f steps to end_time\n",
                c_.name.c_str(), sim_.m.nn, sim_.m.ne, sim_.m.ni, sim_.dt, sim_.dt / sim_.stable.critical,
                sim_.stable.critical, std::ceil(c_.end_time / sim_.dt));
+  if (const Comm* comm = sim_.comm())
+    std::fprintf(stderr,
+                 "fdem: %d processes; this one (0) holds %d of the nodes (%d ghosts), %d elements (%d ghosts); "
+                 "ghost positions sent per step: %ld bytes\n",
+                 comm->size(), sim_.m.nn, sim_.m.nn - sim_.m.owned_nodes(), sim_.m.ne,
+                 sim_.m.ne - sim_.m.owned_elems(), sim_.exchange_bytes());
   if (sim_.stable.contact_pending)
     std::fprintf(stderr,
                  "fdem: contact springs act once surfaces can meet (first failed interface); the critical "
@@ -223,24 +233,35 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoints_written = ckpt_written_;
   r.restart = restart_;
   r.signal = signal_;
-  const nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
-  write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
-  print_run_end(summary, r, sim_.step_count, opt_.progress);
+  nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
+  if (const Comm* comm = sim_.comm()) {  // a run over several processes
+    double bytes[2] = {static_cast<double>(sim_.exchange_bytes()), sim_.phase_times().exchange};
+    double most[2] = {-bytes[0], -bytes[1]};
+    comm->sum(bytes, 2);
+    comm->min(most, 2);
+    summary["processes"] = {{"count", comm->size()},
+                            {"exchange_bytes_per_step", bytes[0]},
+                            {"exchange_bytes_per_step_most", -most[0]},
+                            {"exchange_seconds_most", -most[1]},
+                            {"gpu_aware_mpi", comm->gpu_aware()}};
+  }
+  if (writes_) write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
+  if (writes_) print_run_end(summary, r, sim_.step_count, opt_.progress);
   return summary;
 }
 
 template <int D>
 nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                       const RunIdentity& id, const StateArrays* restart) {
-  RunLoop<D> run(c, std::move(mesh), out, opt, id, restart);
+                       const RunIdentity& id, const StateArrays* restart, const SubMesh* part) {
+  RunLoop<D> run(c, std::move(mesh), out, opt, id, restart, part);
   return run.run();
 }
 
 template class RunLoop<2>;
 template class RunLoop<3>;
 template nlohmann::json run_dim<2>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
-                                   const RunIdentity&, const StateArrays*);
+                                   const RunIdentity&, const StateArrays*, const SubMesh*);
 template nlohmann::json run_dim<3>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
-                                   const RunIdentity&, const StateArrays*);
+                                   const RunIdentity&, const StateArrays*, const SubMesh*);
 
 }  // namespace fdem

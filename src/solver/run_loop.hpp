@@ -11,6 +11,7 @@
 #include "io/case.hpp"
 #include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
+#include "parallel/decompose.hpp"
 #include "solver/history_table.hpp"
 #include "solver/run.hpp"
 #include "solver/run_output.hpp"
@@ -25,8 +26,10 @@ class RunLoop {
  public:
   // restart: the checkpoint to go on from (checked against the case by the caller), or null. The
   // mesh is freed once the model and the outputs are set up (the run does not need it).
+  // part: this process's part of a run over several processes (opt.comm), the model built from
+  // it; mesh is then the whole mesh (load window, counts). Null: one process.
   RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-          const RunIdentity& id, const StateArrays* restart);
+          const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr);
   // Runs to the end time (or the step limit, or the stop rule); returns the summary written to
   // out/summary.json.
   nlohmann::json run();
@@ -63,12 +66,13 @@ class RunLoop {
   double prior_wall_ = 0, prior_loop_wall_ = 0, ckpt_wall_ = 0;
   long ckpt_written_ = 0;
   int signal_ = 0;  // the signal that stopped the run (0: none)
+  bool writes_ = true;  // this process writes the outputs (process 0 of a run over several)
 };
 
 // run_case's run of a prepared case in dimension D.
 template <int D>
 nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                       const RunIdentity& id, const StateArrays* restart);
+                       const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr);
 
 extern template class RunLoop<2>;
 extern template class RunLoop<3>;

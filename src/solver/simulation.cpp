@@ -66,6 +66,7 @@ void Simulation<D>::step(bool sample) {
   lap(phase_times_.ledger);
   const NodeSums w = update_nodes_now(sample);
   lap(phase_times_.nodes);
+  if (halo_) exchange_ghosts();
   book_energies(e, w, sample);
   t += dt;
   ++step_count;
@@ -75,10 +76,52 @@ void Simulation<D>::step(bool sample) {
 }
 
 template <int D>
+void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const SubMesh& part) {
+  if (step_count > 0) throw InputError("set_decomposition: the run has started");
+  if (part.mesh.num_nodes() != m.nn || part.mesh.num_elems() != m.ne || part.mesh.num_ifaces() != m.ni)
+    throw InputError("set_decomposition: the model was not built from this part's mesh");
+  comm_ = std::move(comm);
+  halo_ = std::make_unique<Halo<D>>(part);
+  // the time step: the smallest contributions over the processes, decided as one run would
+  StepContributions& sc = step_sources_;
+  double v[5] = {sc.bulk, sc.interfaces, sc.platens, sc.contact, sc.platens_on_surfaces};
+  comm_->min(v, 5);
+  StepContributions all = sc;
+  all.bulk = v[0];
+  all.interfaces = v[1];
+  all.platens = v[2];
+  all.contact = v[3];
+  all.platens_on_surfaces = v[4];
+  all.bulk_element = -1;
+  agree_time_step(all);
+  // the energy floor from the whole body's volume (each element once)
+  auto vol = Kokkos::create_mirror_view(m.vol0);
+  Kokkos::deep_copy(vol, m.vol0);
+  double own[2] = {0, 0};
+  for (int e = 0; e < m.ne; ++e) own[e < m.owned_elems() ? 0 : 1] += vol(e);
+  double whole = own[0];
+  comm_->sum(&whole, 1);
+  if (own[0] + own[1] > 0) energy_floor_ *= whole / (own[0] + own[1]);
+  exchange_ghosts();
+}
+
+template <int D>
+void Simulation<D>::exchange_ghosts() {
+  Kokkos::Timer clock;
+  halo_->pack(m);
+  fence("fdem::halo: packed");  // MPI reads the buffer
+  comm_->exchange(halo_->neighbours, halo_->send_buf, halo_->send_off, halo_->recv_buf, halo_->recv_off, D);
+  halo_->unpack(m);
+  fence("fdem::halo: unpacked");
+  phase_times_.exchange += clock.seconds();
+}
+
+template <int D>
 void Simulation<D>::sample_reactions() {
   for (size_t b = 0; b < bc_nodes_.size(); ++b) {
     double s[3] = {0, 0, 0};
     node_list_force<D>(m, bc_nodes_[b], s);
+    sum_over_processes(s, 3);
     for (int k = 0; k < 3; ++k) reactions_[b][k] = -s[k];
   }
 }
@@ -126,6 +169,17 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
     // ramped point loads: each step's work spans [t, t + dt] (kernels/nodes.hpp), so the work by
     // time t is that of the steps before
     if (prm_.load_ramps > 0) e.work_external += work_ramp_;
+    if (comm_) {  // every part's own share, summed: the whole run's
+      double v[] = {e.kinetic, e.strain, e.interface_elastic, e.contact_elastic, e.fracture, e.damping,
+                    e.friction, e.work_external, e.momentum[0], e.momentum[1], e.momentum[2],
+                    static_cast<double>(e.damaged), static_cast<double>(e.failed)};
+      comm_->sum(v, 13);
+      double* f[] = {&e.kinetic, &e.strain, &e.interface_elastic, &e.contact_elastic, &e.fracture, &e.damping,
+                     &e.friction, &e.work_external, &e.momentum[0], &e.momentum[1], &e.momentum[2]};
+      for (int i = 0; i < 11; ++i) *f[i] = v[i];
+      e.damaged = static_cast<long>(v[11]);
+      e.failed = static_cast<long>(v[12]);
+    }
     const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
                        e.fracture + e.damping + e.friction;
     if (!have_reference_) {
@@ -159,6 +213,15 @@ void Simulation<D>::push_works() {
   h(1) = work_bc_;
   h(2) = work_ramp_;
   Kokkos::deep_copy(work_dev_, h);
+}
+
+template <int D>
+void Simulation<D>::agree_time_step(const StepContributions& all) {
+  if (step_count > 0) throw InputError("agree_time_step: the run has started");
+  step_sources_ = all;
+  const TimeStep ts = decide_stable_step(step_sources_);
+  stable = ts.stable;
+  dt = ts.dt;
 }
 
 template <int D>
@@ -235,8 +298,14 @@ void Simulation<D>::check_finite() {
 template <int D>
 long Simulation<D>::check_inverted(std::string* where) {
   const InvertedElements inv = inverted_elements<D>(m);
-  const int count = inv.count, first = inv.first;
-  if (count > 0 && where) {
+  const int local = inv.count, first = inv.first;
+  double all = local;  // over the processes (each counts its own elements)
+  sum_over_processes(&all, 1);
+  const long count = static_cast<long>(all);
+  if (count > 0 && where && local == 0) {
+    *where = std::to_string(count) + " element(s) turned inside out at step " + std::to_string(step_count) +
+             " on other processes";
+  } else if (count > 0 && where) {
     auto X_h = Kokkos::create_mirror_view(m.X);
     auto x_h = Kokkos::create_mirror_view(m.x);
     auto el_h = Kokkos::create_mirror_view(m.elem);
@@ -292,9 +361,7 @@ void Simulation<D>::check_stability() {
 
 template <int D>
 std::array<double, 3> Simulation<D>::platen_force(int p) const {
-  Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
-  return {platen_acc_host_(p, kPlatenForce + 0), platen_acc_host_(p, kPlatenForce + 1),
-          platen_acc_host_(p, kPlatenForce + 2)};
+  return platen_forces()[p];
 }
 
 template <int D>
@@ -303,6 +370,12 @@ std::vector<std::array<double, 3>> Simulation<D>::platen_forces() const {
   std::vector<std::array<double, 3>> out(m.platens.count);
   for (int p = 0; p < m.platens.count; ++p)
     for (int k = 0; k < 3; ++k) out[p][k] = platen_acc_host_(p, kPlatenForce + k);
+  if (comm_ && !out.empty()) {  // the parts' own boundary nodes: summed, the whole body's
+    std::vector<double> flat;
+    for (const auto& f : out) flat.insert(flat.end(), f.begin(), f.end());
+    comm_->sum(flat.data(), static_cast<int>(flat.size()));
+    for (size_t i = 0; i < flat.size(); ++i) out[i / 3][i % 3] = flat[i];
+  }
   return out;
 }
 

@@ -16,6 +16,8 @@
 #include "kernels/outputs.hpp"
 #include "kernels/platens.hpp"
 #include "mesh/mesh.hpp"
+#include "parallel/comm.hpp"
+#include "parallel/halo.hpp"
 #include "solver/contact_system.hpp"
 #include "solver/stable_step.hpp"
 
@@ -48,9 +50,12 @@ struct PhaseTimes {
   double contact = 0;  // handover, broad phase, narrow phase, and the one contribute of the forces
   double ledger = 0;   // energies, reactions and momentum on sampled steps
   double nodes = 0;    // node update (damping, velocity BCs, leap-frog)
+  // A run over several processes: the exchange of the ghost positions (pack, MPI, unpack), timed
+  // on every step (it waits for the step's kernels anyway).
+  double exchange = 0;
   long steps = 0;  // all steps
   long timed = 0;  // the timed ones
-  double total() const { return forces + platens + contact + ledger + nodes; }
+  double total() const { return forces + platens + contact + ledger + nodes + exchange; }
 };
 
 template <int D>
@@ -82,6 +87,21 @@ class Simulation {
     if (stable.contact_pending) take_contact_step();
   }
   double dt_before_change() const { return dt_before_change_; }
+  // What the time step was decided from (this model's smallest bulk, spring and platen steps).
+  const StepContributions& step_contributions() const { return step_sources_; }
+  // One part of a decomposed run, before its first step: decides the time step from the
+  // contributions of all parts (`all`: smallest() over them), so that every part takes the step
+  // of the whole run.
+  void agree_time_step(const StepContributions& all);
+  // One part of a run over several processes (this model built from part.mesh,
+  // src/parallel/decompose.hpp), before the first step: the processes agree on the time step,
+  // the ghosts take their owners' positions, and from then on every step ends with that exchange
+  // and every sum the run reports (energies, momentum, counts, platen forces, reactions, inverted
+  // elements) is over all processes, the same on each.
+  void set_decomposition(std::shared_ptr<const Comm> comm, const SubMesh& part);
+  const Comm* comm() const { return comm_.get(); }
+  // Bytes of ghost positions this process sends per step (0 on one process).
+  long exchange_bytes() const { return halo_ ? halo_->send_bytes() : 0; }
   // Work skipped because the scene does not need it (the results are the same either way; the
   // switches exist for the tests and benchmarks that show it): no damping force or damping work
   // while both damping coefficients are zero.
@@ -149,6 +169,13 @@ class Simulation {
 
  private:
   ForceScatter<D> scatter_;
+  std::shared_ptr<const Comm> comm_;  // null: one process
+  std::unique_ptr<Halo<D>> halo_;
+  void exchange_ghosts();
+  // Sums over the processes in place (nothing on one process).
+  void sum_over_processes(double* v, int n) const {
+    if (comm_) comm_->sum(v, n);
+  }
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   double mu0_ = 0;         // contact friction coefficient as given
   double srf_ = 1;         // strength reduction factor now

@@ -39,6 +39,22 @@ struct StepContributions {
   double safety = 1;           // the case's time.safety_factor
 };
 
+// The contributions of two parts of a decomposed run of one case as one (each the smaller;
+// bulk_element, a part's own index, -1; dt_cap and safety, the case's, from a): the parts then
+// decide the whole run's time step.
+inline StepContributions smallest(const StepContributions& a, const StepContributions& b) {
+  StepContributions c = a;
+  if (b.bulk < a.bulk) c.bulk = b.bulk;
+  c.bulk_element = -1;
+  if (b.interfaces < c.interfaces) c.interfaces = b.interfaces;
+  if (b.platens < c.platens) c.platens = b.platens;
+  if (b.contact < c.contact) c.contact = b.contact;
+  if (b.platens_on_surfaces < c.platens_on_surfaces) c.platens_on_surfaces = b.platens_on_surfaces;
+  c.has_contact = a.has_contact || b.has_contact;
+  c.may_meet = a.may_meet || b.may_meet;
+  return c;
+}
+
 struct TimeStep {
   StableStep stable;
   double dt = 0;

@@ -1,0 +1,36 @@
+#pragma once
+// The processes of a run over MPI as the solver sees them (docs/parallel.md). The solver library
+// does not see MPI: an MPI build (-DFDEM_ENABLE_MPI=ON) implements this interface in
+// src/parallel/mpi/comm_mpi.cpp, and fdem's main hands it to run_case (RunOptions::comm) when it
+// runs under mpirun on more than one process. Host only; called between kernels, never inside.
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "kernels/fdem_kokkos.hpp"
+
+namespace fdem {
+
+class Comm {
+ public:
+  virtual ~Comm() = default;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  // In place, over all processes, in the same order on every process (so that every process gets
+  // the same bits).
+  virtual void sum(double* v, int n) const = 0;
+  virtual void min(double* v, int n) const = 0;
+  // One halo exchange (src/parallel/halo.hpp): for each k, the doubles
+  // send[send_off[k] * per .. send_off[k + 1] * per) go to process neighbours[k], and what it
+  // sends back lands in recv[recv_off[k] * per .. recv_off[k + 1] * per). The buffers are in the
+  // run's device memory: a GPU-aware MPI takes them as they are, others through host copies.
+  virtual void exchange(const std::vector<int>& neighbours, const Kokkos::View<double*>& send,
+                        const std::vector<int>& send_off, const Kokkos::View<double*>& recv,
+                        const std::vector<int>& recv_off, int per) const = 0;
+  // Whether the MPI passes device buffers without host copies (CUDA-aware); "" when unknown.
+  virtual std::string gpu_aware() const = 0;
+  // Ends every process of the run now (after an error on one of them: the others would wait for it).
+  [[noreturn]] virtual void abort(int code) const = 0;
+};
+
+}  // namespace fdem

@@ -1,0 +1,199 @@
+#include "parallel/decompose.hpp"
+
+#include <algorithm>
+#include <string>
+
+#include "common/error.hpp"
+
+namespace fdem {
+
+namespace {
+
+// Compressed rows: the items of key k are items[start[k] .. start[k + 1]).
+struct Rows {
+  std::vector<int> start, items;
+};
+
+// key(j) for j < count, each j listed `per` times (the keys of item j: key(j, a), a < per).
+template <class Key>
+Rows rows_of(int keys, int count, int per, Key key) {
+  Rows r;
+  r.start.assign(static_cast<size_t>(keys) + 1, 0);
+  for (int j = 0; j < count; ++j)
+    for (int a = 0; a < per; ++a) ++r.start[key(j, a) + 1];
+  for (int k = 0; k < keys; ++k) r.start[k + 1] += r.start[k];
+  r.items.resize(r.start[keys]);
+  std::vector<int> fill(r.start.begin(), r.start.end() - 1);
+  for (int j = 0; j < count; ++j)
+    for (int a = 0; a < per; ++a) r.items[fill[key(j, a)]++] = j;
+  return r;
+}
+
+}  // namespace
+
+std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts) {
+  const int D = whole.dim, npe = D + 1, nn = whole.num_nodes(), ne = whole.num_elems(),
+            ni = whole.num_ifaces();
+  if (parts < 1) throw InputError("decompose: parts must be at least 1 (got " + std::to_string(parts) + ")");
+  if (static_cast<int>(elem_part.size()) != ne)
+    throw InputError("decompose: " + std::to_string(elem_part.size()) + " part ids for " +
+                     std::to_string(ne) + " elements");
+  for (int e = 0; e < ne; ++e)
+    if (elem_part[e] < 0 || elem_part[e] >= parts)
+      throw InputError("decompose: element " + std::to_string(e) + " has part " +
+                       std::to_string(elem_part[e]) + ", outside [0, " + std::to_string(parts - 1) + "]");
+  if (whole.owned_nodes >= 0) throw InputError("decompose: the mesh is already one part of a decomposition");
+  auto enode = [&](int e, int a) { return whole.elems[static_cast<size_t>(e) * npe + a]; };
+  auto inode = [&](int q, int a) { return whole.ifaces[static_cast<size_t>(q) * 2 * D + a]; };
+
+  // node owners: the part of the first element holding the node (orphan nodes: part 0)
+  std::vector<int> owner(nn, -1);
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < npe; ++a)
+      if (owner[enode(e, a)] < 0) owner[enode(e, a)] = elem_part[e];
+  for (int& o : owner)
+    if (o < 0) o = 0;
+  // own items per part (ascending) and each node's index among its owner's own nodes
+  std::vector<std::vector<int>> own_nodes(parts), own_elems(parts);
+  std::vector<int> own_index(nn);
+  for (int n = 0; n < nn; ++n) {
+    own_index[n] = static_cast<int>(own_nodes[owner[n]].size());
+    own_nodes[owner[n]].push_back(n);
+  }
+  for (int e = 0; e < ne; ++e) own_elems[elem_part[e]].push_back(e);
+  const Rows n2e = rows_of(nn, ne, npe, enode);
+  const Rows n2i = rows_of(nn, ni, 2 * D, inode);
+
+  std::vector<SubMesh> out(parts);
+  std::vector<int> emark(ne, -1), imark(ni, -1), nmark(nn, -1);  // stamped with the part
+  std::vector<int> elocal(ne, -1), nlocal(nn, -1), ilocal(ni, -1);
+  // sends[q][p]: q's own local nodes that p needs, in p's order
+  std::vector<std::vector<std::vector<int>>> sends(parts, std::vector<std::vector<int>>(parts));
+  for (int p = 0; p < parts; ++p) {
+    SubMesh& s = out[p];
+    s.part = p;
+    s.parts = parts;
+    std::vector<int> ifs, els, nds;
+    for (int n : own_nodes[p])
+      for (int k = n2i.start[n]; k < n2i.start[n + 1]; ++k)
+        if (imark[n2i.items[k]] != p) {
+          imark[n2i.items[k]] = p;
+          ifs.push_back(n2i.items[k]);
+        }
+    auto add_elem = [&](int e) {
+      if (emark[e] != p) {
+        emark[e] = p;
+        els.push_back(e);
+      }
+    };
+    for (int e : own_elems[p]) add_elem(e);
+    for (int n : own_nodes[p])
+      for (int k = n2e.start[n]; k < n2e.start[n + 1]; ++k) add_elem(n2e.items[k]);
+    for (int q : ifs)
+      for (int side = 0; side < 2; ++side) add_elem(whole.iface_elems[2 * static_cast<size_t>(q) + side]);
+    const size_t e1 = els.size();
+    for (size_t j = 0; j < e1; ++j)  // the closure: every element at a node of E1
+      for (int a = 0; a < npe; ++a) {
+        const int n = enode(els[j], a);
+        for (int k = n2e.start[n]; k < n2e.start[n + 1]; ++k) add_elem(n2e.items[k]);
+      }
+    for (int n : own_nodes[p]) nmark[n] = p;  // orphans included
+    for (int e : els)
+      for (int a = 0; a < npe; ++a)
+        if (nmark[enode(e, a)] != p) {
+          nmark[enode(e, a)] = p;
+          nds.push_back(enode(e, a));
+        }
+    // order: own first, each group ascending
+    auto own_first = [](std::vector<int>& v, auto is_own) {
+      std::sort(v.begin(), v.end(), [&](int a, int b) {
+        const bool oa = is_own(a), ob = is_own(b);
+        return oa != ob ? oa : a < b;
+      });
+      return static_cast<int>(std::count_if(v.begin(), v.end(), is_own));
+    };
+    const int eo = own_first(els, [&](int e) { return elem_part[e] == p; });
+    std::sort(nds.begin(), nds.end());
+    std::vector<int> nodes = own_nodes[p];
+    nodes.insert(nodes.end(), nds.begin(), nds.end());
+    const int io = own_first(ifs, [&](int q) { return owner[inode(q, 0)] == p; });
+
+    HostMesh& m = s.mesh;
+    m.dim = D;
+    m.region_names = whole.region_names;
+    m.warnings = whole.warnings;
+    m.bodies = whole.bodies;
+    m.owned_nodes = static_cast<int>(own_nodes[p].size());
+    m.owned_elems = eo;
+    m.owned_ifaces = io;
+    for (size_t j = 0; j < nodes.size(); ++j) nlocal[nodes[j]] = static_cast<int>(j);
+    for (size_t j = 0; j < els.size(); ++j) elocal[els[j]] = static_cast<int>(j);
+    for (size_t j = 0; j < ifs.size(); ++j) ilocal[ifs[j]] = static_cast<int>(j);
+    m.X.reserve(nodes.size() * D);
+    for (int n : nodes) {
+      for (int k = 0; k < D; ++k) m.X.push_back(whole.X[static_cast<size_t>(n) * D + k]);
+      m.node_origin.push_back(whole.node_origin.empty() ? n : whole.node_origin[n]);
+    }
+    m.elems.reserve(els.size() * npe);
+    for (int e : els) {
+      for (int a = 0; a < npe; ++a) m.elems.push_back(nlocal[enode(e, a)]);
+      m.elem_region.push_back(whole.elem_region[e]);
+    }
+    for (int q : ifs) {
+      for (int a = 0; a < 2 * D; ++a) m.ifaces.push_back(nlocal[inode(q, a)]);
+      for (int side = 0; side < 2; ++side)
+        m.iface_elems.push_back(elocal[whole.iface_elems[2 * static_cast<size_t>(q) + side]]);
+    }
+    for (const auto& [name, set] : whole.node_sets) {
+      auto& local = m.node_sets[name];
+      for (int n : set)
+        if (owner[n] == p) local.push_back(own_index[n]);
+    }
+    for (const auto& [name, set] : whole.iface_sets) {
+      auto& local = m.iface_sets[name];
+      for (int q : set)
+        if (imark[q] == p && ilocal[q] < io) local.push_back(ilocal[q]);
+      std::sort(local.begin(), local.end());
+    }
+    s.node_global = nodes;
+    s.elem_global = els;
+    s.iface_global = ifs;
+    // receive lists by owner (ghosts ascending), and the owners' send lists in the same order
+    std::vector<std::vector<int>> recv(parts);
+    for (size_t j = own_nodes[p].size(); j < nodes.size(); ++j) {
+      const int n = nodes[j], q = owner[n];
+      recv[q].push_back(static_cast<int>(j));
+      sends[q][p].push_back(own_index[n]);
+    }
+    for (int q = 0; q < parts; ++q)
+      if (!recv[q].empty()) {
+        s.neighbours.push_back(q);
+        s.recv.push_back(std::move(recv[q]));
+      }
+    for (int n : nodes) nlocal[n] = -1;
+    for (int e : els) elocal[e] = -1;
+    for (int q : ifs) ilocal[q] = -1;
+  }
+  // a part's neighbours: the parts it receives from and those it sends to (where several parts
+  // share nodes the two need not be the same)
+  for (int q = 0; q < parts; ++q) {
+    SubMesh& s = out[q];
+    std::vector<int> nb = s.neighbours;
+    for (int p = 0; p < parts; ++p)
+      if (!sends[q][p].empty() && !std::binary_search(s.neighbours.begin(), s.neighbours.end(), p))
+        nb.push_back(p);
+    std::sort(nb.begin(), nb.end());
+    std::vector<std::vector<int>> recv(nb.size()), send(nb.size());
+    for (size_t k = 0; k < nb.size(); ++k) {
+      const auto it = std::lower_bound(s.neighbours.begin(), s.neighbours.end(), nb[k]);
+      if (it != s.neighbours.end() && *it == nb[k]) recv[k] = std::move(s.recv[it - s.neighbours.begin()]);
+      send[k] = std::move(sends[q][nb[k]]);
+    }
+    s.neighbours = nb;
+    s.recv = std::move(recv);
+    s.send = std::move(send);
+  }
+  return out;
+}
+
+}  // namespace fdem

@@ -1,0 +1,57 @@
+#pragma once
+// Domain decomposition of a host mesh after interface insertion (issue 20, docs/parallel.md): from
+// a part id per element (partition.hpp), each part's own share of the mesh with the ghost layer it
+// needs to compute its nodes' forces alone, and the lists of the per-step exchange of ghost node
+// states between parts. Host only; the device side of the exchange is parallel/halo.hpp.
+//
+// Ownership. An element belongs to its part. A node belongs to the part of the first (lowest
+// index) element that holds it: after insertion a node of a fracturable region has one element, so
+// it goes with it; a node that elements of several parts share (a continuous region cut by the
+// partition) goes to one of them. An interface is counted (energies, damage counts) by the owner
+// of its first side-A node.
+//
+// What a part holds (its "local" items), so that the force on each of its own nodes is complete
+// without any exchange of forces:
+//   interfaces: those with at least one own node;
+//   elements:   its own; those holding an own node; the sides of its interfaces (E1); and every
+//               element holding a node of E1 (so that the masses of the nodes its interfaces join,
+//               which set their springs' stable step, are complete);
+//   nodes:      the nodes of those elements: its own, then the ghosts.
+// A cut interface is thus computed by every part that owns one of its nodes, from the same
+// positions (the ghosts' are the owners' to the bit after each exchange) and the same history, so
+// its forces and its damage history are the same on each of them bit for bit: each part keeps the
+// forces on its own nodes, and no force or history is ever sent. Ghost elements are computed too
+// (their forces on shared own nodes count); the forces on ghost nodes are dropped.
+//
+// Order of the local items: own elements (in the whole mesh's order), then ghost elements; own
+// nodes, then ghost nodes; counted interfaces, then the others (each group in the whole mesh's
+// order, so that interfaces stay in order of their side-A element where every node has one
+// element: the force pass's chunks). The reductions of a step (energies, counts) run over the first
+// owned_* items (HostMesh::owned_*), so that every item is summed by exactly one part.
+#include <vector>
+
+#include "mesh/mesh.hpp"
+
+namespace fdem {
+
+struct SubMesh {
+  int part = 0, parts = 1;
+  // The local mesh: node sets hold the own nodes only (velocity BCs, reactions, monitors: each
+  // node is counted once over the parts); iface_sets the counted interfaces only; owned_* set.
+  HostMesh mesh;
+  std::vector<int> node_global, elem_global, iface_global;  // local index -> whole mesh's index
+  // The exchange, per neighbouring part (neighbours sorted): `send[k]` are own local nodes whose
+  // state part neighbours[k] needs, `recv[k]` the local ghost nodes it sends, both in order of the
+  // whole mesh's node index, so that position j of part p's send list to q is position j of q's
+  // receive list from p.
+  std::vector<int> neighbours;
+  std::vector<std::vector<int>> send, recv;
+  int ghost_nodes() const { return mesh.num_nodes() - mesh.owned_nodes; }
+  int ghost_elems() const { return mesh.num_elems() - mesh.owned_elems; }
+};
+
+// Every part's share of `whole` (after insert_interfaces), for part ids `elem_part` in
+// [0, parts). InputError when elem_part does not have one valid id per element. Deterministic.
+std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts);
+
+}  // namespace fdem

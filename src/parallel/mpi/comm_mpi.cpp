@@ -1,0 +1,119 @@
+#include "parallel/mpi/comm_mpi.hpp"
+
+#include <mpi.h>
+#if __has_include(<mpi-ext.h>)
+#include <mpi-ext.h>  // Open MPI's MPIX_Query_cuda_support
+#endif
+
+#include <cstdio>
+#include <vector>
+
+namespace fdem {
+
+namespace {
+
+using HostBuffer = Kokkos::View<double*>::HostMirror;
+
+// Whether device buffers may go to MPI as they are: host backends always; CUDA when the MPI says
+// it is CUDA-aware (Open MPI's query; other MPIs: no, the buffers go through the host).
+bool pass_device_buffers() {
+  if (Kokkos::SpaceAccessibility<Kokkos::HostSpace, Kokkos::View<double*>::memory_space>::accessible)
+    return true;
+#if defined(KOKKOS_ENABLE_CUDA) && defined(MPIX_CUDA_AWARE_SUPPORT) && MPIX_CUDA_AWARE_SUPPORT
+  return MPIX_Query_cuda_support() == 1;
+#else
+  return false;
+#endif
+}
+
+class MpiComm final : public Comm {
+ public:
+  MpiComm() {
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+    MPI_Comm_size(MPI_COMM_WORLD, &size_);
+    direct_ = pass_device_buffers();
+  }
+  int rank() const override { return rank_; }
+  int size() const override { return size_; }
+  // Reduced on process 0 and broadcast: every process gets the same bits (MPI_Allreduce is only
+  // recommended, not required, to give them).
+  void sum(double* v, int n) const override {
+    if (n <= 0) return;
+    std::vector<double> r(static_cast<size_t>(n));
+    MPI_Reduce(v, r.data(), n, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    if (rank_ == 0) std::copy(r.begin(), r.end(), v);
+    MPI_Bcast(v, n, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
+  void min(double* v, int n) const override {
+    if (n > 0) MPI_Allreduce(MPI_IN_PLACE, v, n, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+  }
+  void exchange(const std::vector<int>& neighbours, const Kokkos::View<double*>& send,
+                const std::vector<int>& send_off, const Kokkos::View<double*>& recv,
+                const std::vector<int>& recv_off, int per) const override {
+    double* sp = send.data();
+    double* rp = recv.data();
+    if (!direct_) {  // through host copies
+      if (hs_.extent(0) != send.extent(0)) hs_ = Kokkos::create_mirror_view(send);
+      if (hr_.extent(0) != recv.extent(0)) hr_ = Kokkos::create_mirror_view(recv);
+      Kokkos::deep_copy(hs_, send);
+      sp = hs_.data();
+      rp = hr_.data();
+    }
+    const int nb = static_cast<int>(neighbours.size());
+    req_.assign(2 * static_cast<size_t>(nb), MPI_REQUEST_NULL);
+    for (int k = 0; k < nb; ++k)
+      MPI_Irecv(rp + static_cast<size_t>(recv_off[k]) * per, (recv_off[k + 1] - recv_off[k]) * per,
+                MPI_DOUBLE, neighbours[k], kTag, MPI_COMM_WORLD, &req_[k]);
+    for (int k = 0; k < nb; ++k)
+      MPI_Isend(sp + static_cast<size_t>(send_off[k]) * per, (send_off[k + 1] - send_off[k]) * per,
+                MPI_DOUBLE, neighbours[k], kTag, MPI_COMM_WORLD, &req_[nb + k]);
+    MPI_Waitall(2 * nb, req_.data(), MPI_STATUSES_IGNORE);
+    if (!direct_) Kokkos::deep_copy(recv, hr_);
+  }
+  std::string gpu_aware() const override {
+    if (Kokkos::SpaceAccessibility<Kokkos::HostSpace, Kokkos::View<double*>::memory_space>::accessible)
+      return "not needed (host backend)";
+    return direct_ ? "yes" : "no (device buffers go through host copies)";
+  }
+  [[noreturn]] void abort(int code) const override {
+    std::fflush(stderr);
+    MPI_Abort(MPI_COMM_WORLD, code);
+    std::abort();  // MPI_Abort does not return; if it did, this process ends anyway
+  }
+
+ private:
+  static constexpr int kTag = 7301;
+  int rank_ = 0, size_ = 1;
+  bool direct_ = true;
+  mutable HostBuffer hs_, hr_;
+  mutable std::vector<MPI_Request> req_;
+};
+
+}  // namespace
+
+std::shared_ptr<Comm> mpi_start(int* argc, char*** argv) {
+  int started = 0;
+  MPI_Initialized(&started);
+  if (!started) MPI_Init(argc, argv);
+  return std::make_shared<MpiComm>();
+}
+
+void mpi_finish() {
+  int started = 0, finished = 0;
+  MPI_Initialized(&started);
+  MPI_Finalized(&finished);
+  if (started && !finished) MPI_Finalize();
+}
+
+std::string mpi_description(const Comm& comm) {
+  char version[MPI_MAX_LIBRARY_VERSION_STRING] = {0};
+  int len = 0;
+  MPI_Get_library_version(version, &len);
+  (void)len;
+  std::string v(version);  // up to its terminating zero
+  if (const auto nl = v.find_first_of("\r\n"); nl != std::string::npos) v.resize(nl);
+  while (!v.empty() && (v.back() == ',' || v.back() == ' ')) v.pop_back();
+  return v + "; processes: " + std::to_string(comm.size()) + "; GPU-aware: " + comm.gpu_aware();
+}
+
+}  // namespace fdem
