@@ -19,7 +19,7 @@
 #include "io/case.hpp"
 #include "mesh/mesh.hpp"
 #include "parallel/decompose.hpp"
-#include "parallel/halo.hpp"
+#include "kernels/halo.hpp"
 #include "parallel/partition.hpp"
 #include "solver/run.hpp"
 #include "solver/simulation.hpp"
@@ -207,7 +207,7 @@ TEST(Decompose, PartsSteppedWithTheExchangeFollowTheWholeDisc) {
     StepContributions all;
     for (const SubMesh& s : subs) {
       sims.push_back(std::make_unique<Simulation<2>>(c, s.mesh));
-      halos.emplace_back(s);
+      halos.emplace_back(s.neighbours, s.send, s.recv);
       all =
           sims.size() == 1 ? sims[0]->step_contributions() : smallest(all, sims.back()->step_contributions());
       EXPECT_GE(sims.back()->dt, ref.dt);
@@ -347,7 +347,7 @@ TEST(Decompose, SharedNodesAcrossPartsStepLikeTheWholeBox) {
       for (int e = 0; e < s.mesh.owned_elems; ++e)
         for (int a = 0; a < 4; ++a) shared_ghosts += s.mesh.elems[4 * e + a] >= s.mesh.owned_nodes;
       sims.push_back(std::make_unique<Simulation<3>>(c, s.mesh));
-      halos.emplace_back(s);
+      halos.emplace_back(s.neighbours, s.send, s.recv);
       all =
           sims.size() == 1 ? sims[0]->step_contributions() : smallest(all, sims.back()->step_contributions());
     }

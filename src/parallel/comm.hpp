@@ -20,7 +20,7 @@ class Comm {
   // the same bits).
   virtual void sum(double* v, int n) const = 0;
   virtual void min(double* v, int n) const = 0;
-  // One halo exchange (src/parallel/halo.hpp): for each k, the doubles
+  // One halo exchange (kernels/halo.hpp): for each k, the doubles
   // send[send_off[k] * per .. send_off[k + 1] * per) go to process neighbours[k], and what it
   // sends back lands in recv[recv_off[k] * per .. recv_off[k + 1] * per). The buffers are in the
   // run's device memory: a GPU-aware MPI takes them as they are, others through host copies.

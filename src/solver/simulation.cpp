@@ -81,7 +81,7 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   if (part.mesh.num_nodes() != m.nn || part.mesh.num_elems() != m.ne || part.mesh.num_ifaces() != m.ni)
     throw InputError("set_decomposition: the model was not built from this part's mesh");
   comm_ = std::move(comm);
-  halo_ = std::make_unique<Halo<D>>(part);
+  halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv);
   // the time step: the smallest contributions over the processes, decided as one run would
   StepContributions& sc = step_sources_;
   double v[5] = {sc.bulk, sc.interfaces, sc.platens, sc.contact, sc.platens_on_surfaces};

@@ -1,5 +1,6 @@
 #pragma once
-// The per-step exchange of a decomposed run (src/parallel/decompose.hpp) on the device: after the
+// The per-step exchange of a decomposed run (src/parallel/decompose.hpp builds the lists) on the
+// device: after the
 // node update each part packs the positions of its own nodes that other parts hold as ghosts into
 // one buffer, the buffers travel (in one process: exchange_in_process; over MPI: the same buffers
 // handed to MPI), and each part unpacks what it received into its ghost nodes. Positions only: the
@@ -11,7 +12,6 @@
 #include <vector>
 
 #include "kernels/model.hpp"
-#include "parallel/decompose.hpp"
 
 namespace fdem {
 
@@ -19,15 +19,19 @@ template <int D>
 class Halo {
  public:
   Halo() = default;
-  explicit Halo(const SubMesh& s) : neighbours(s.neighbours) {
+  // Per neighbouring part k (sorted): neighbours[k], the own nodes it needs (send[k]) and the ghost
+  // nodes it sends (recv[k]), as SubMesh lists them.
+  Halo(const std::vector<int>& nbrs, const std::vector<std::vector<int>>& send,
+       const std::vector<std::vector<int>>& recv)
+      : neighbours(nbrs) {
     send_off.assign(1, 0);
     recv_off.assign(1, 0);
-    for (size_t k = 0; k < s.neighbours.size(); ++k) {
-      send_off.push_back(send_off.back() + static_cast<int>(s.send[k].size()));
-      recv_off.push_back(recv_off.back() + static_cast<int>(s.recv[k].size()));
+    for (size_t k = 0; k < nbrs.size(); ++k) {
+      send_off.push_back(send_off.back() + static_cast<int>(send[k].size()));
+      recv_off.push_back(recv_off.back() + static_cast<int>(recv[k].size()));
     }
-    send_idx = upload("fdem::halo::send_idx", s.send, send_off.back());
-    recv_idx = upload("fdem::halo::recv_idx", s.recv, recv_off.back());
+    send_idx = upload("fdem::halo::send_idx", send, send_off.back());
+    recv_idx = upload("fdem::halo::recv_idx", recv, recv_off.back());
     send_buf = Kokkos::View<double*>("fdem::halo::send_buf", static_cast<size_t>(send_off.back()) * D);
     recv_buf = Kokkos::View<double*>("fdem::halo::recv_buf", static_cast<size_t>(recv_off.back()) * D);
   }
