@@ -77,11 +77,11 @@ struct ForceKernel {
   KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
     auto acc = sf.access();
     if (fused) {
-      const int e1 = kmin((c + 1) * kChunk, el.ne);
+      const int e1 = kmin((c + 1) * kChunk, el.bulk_elems());
       for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
       for (int q = in.ichunk(c); q < in.ichunk(c + 1); ++q) interface(q, acc);
     } else if (c < nbc) {
-      const int e1 = kmin((c + 1) * kChunk, el.ne);
+      const int e1 = kmin((c + 1) * kChunk, el.bulk_elems());
       for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
     } else {
       const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, in.ni);

@@ -73,6 +73,10 @@ struct ElementData {
   int ne = 0;
   int ne_own = -1;  // decomposed run: the own elements come first (energies, checks); -1: all
   int owned_elems() const { return ne_own < 0 ? ne : ne_own; }
+  // decomposed run: the elements whose bulk forces count (own, then ghosts at an own node) come
+  // first; the ghosts after them only carry interfaces' sides. -1: all
+  int ne_bulk = -1;
+  KOKKOS_INLINE_FUNCTION int bulk_elems() const { return ne_bulk < 0 ? ne : ne_bulk; }
   double thickness = 1.0;  // 2D: out-of-plane thickness; 3D: 1
   bool plane_stress = false;
   Kokkos::View<int* [D + 1]> elem;

@@ -41,6 +41,9 @@ struct HostMesh {
   // One part of a decomposed mesh (src/parallel/decompose.hpp): its first owned_nodes nodes,
   // owned_elems elements and owned_ifaces interfaces are its own, the rest ghosts. -1: a whole mesh.
   int owned_nodes = -1, owned_elems = -1, owned_ifaces = -1;
+  // Its first bulk_elems elements have their bulk forces computed (the own ones and the ghosts at
+  // an own node); the others only carry interfaces' sides and masses. -1: all.
+  int bulk_elems = -1;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

@@ -104,19 +104,54 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
           nmark[enode(e, a)] = p;
           nds.push_back(enode(e, a));
         }
-    // order: own first, each group ascending
-    auto own_first = [](std::vector<int>& v, auto is_own) {
-      std::sort(v.begin(), v.end(), [&](int a, int b) {
-        const bool oa = is_own(a), ob = is_own(b);
-        return oa != ob ? oa : a < b;
-      });
-      return static_cast<int>(std::count_if(v.begin(), v.end(), is_own));
+    // Elements: own, then the ghosts at an own node (their bulk forces count), then the other
+    // ghosts (sides of interfaces, masses: no bulk force). Each group in the whole mesh's order.
+    auto eclass = [&](int e) {
+      if (elem_part[e] == p) return 0;
+      for (int a = 0; a < npe; ++a)
+        if (owner[enode(e, a)] == p) return 1;
+      return 2;
     };
-    const int eo = own_first(els, [&](int e) { return elem_part[e] == p; });
-    std::sort(nds.begin(), nds.end());
+    std::vector<std::pair<int, int>> keyed;
+    for (int e : els) keyed.push_back({eclass(e), e});
+    std::sort(keyed.begin(), keyed.end());
+    int eo = 0, eb = 0;
+    for (size_t j = 0; j < keyed.size(); ++j) {
+      els[j] = keyed[j].second;
+      eo += keyed[j].first == 0;
+      eb += keyed[j].first <= 1;
+    }
+    // Ghost nodes: those a step reads (of the elements with a bulk force, of the interfaces) are
+    // exchanged; the others (only of elements without one) never move from where they start.
+    for (int e : els) elocal[e] = 1;  // scratch: "local"
+    {
+      for (int j = 0; j < eb; ++j)
+        for (int a = 0; a < npe; ++a) nlocal[enode(els[j], a)] = 1;
+      for (int q : ifs)
+        for (int a = 0; a < 2 * D; ++a) nlocal[inode(q, a)] = 1;
+      std::sort(nds.begin(), nds.end(), [&](int a, int b) {
+        const bool ra = nlocal[a] == 1, rb = nlocal[b] == 1;
+        return ra != rb ? ra : a < b;
+      });
+      for (int n : nds) s.inert_ghosts += nlocal[n] != 1;
+      for (int n : nds) nlocal[n] = -1;
+      for (int n : own_nodes[p]) nlocal[n] = -1;
+    }
+    for (int e : els) elocal[e] = -1;
     std::vector<int> nodes = own_nodes[p];
     nodes.insert(nodes.end(), nds.begin(), nds.end());
-    const int io = own_first(ifs, [&](int q) { return owner[inode(q, 0)] == p; });
+    // Interfaces: the counted ones, then the others; each group in order of its side-A element's
+    // local index (the force pass's chunks), then the whole mesh's order.
+    for (size_t j = 0; j < els.size(); ++j) elocal[els[j]] = static_cast<int>(j);
+    std::sort(ifs.begin(), ifs.end(), [&](int a, int b) {
+      const bool ca = owner[inode(a, 0)] == p, cb = owner[inode(b, 0)] == p;
+      if (ca != cb) return ca;
+      const int la = elocal[whole.iface_elems[2 * static_cast<size_t>(a)]];
+      const int lb = elocal[whole.iface_elems[2 * static_cast<size_t>(b)]];
+      return la != lb ? la < lb : a < b;
+    });
+    const int io =
+        static_cast<int>(std::count_if(ifs.begin(), ifs.end(), [&](int q) { return owner[inode(q, 0)] == p; }));
 
     HostMesh& m = s.mesh;
     m.dim = D;
@@ -126,6 +161,7 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
     m.owned_nodes = static_cast<int>(own_nodes[p].size());
     m.owned_elems = eo;
     m.owned_ifaces = io;
+    m.bulk_elems = eb;
     for (size_t j = 0; j < nodes.size(); ++j) nlocal[nodes[j]] = static_cast<int>(j);
     for (size_t j = 0; j < els.size(); ++j) elocal[els[j]] = static_cast<int>(j);
     for (size_t j = 0; j < ifs.size(); ++j) ilocal[ifs[j]] = static_cast<int>(j);
@@ -160,7 +196,7 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
     s.iface_global = ifs;
     // receive lists by owner (ghosts ascending), and the owners' send lists in the same order
     std::vector<std::vector<int>> recv(parts);
-    for (size_t j = own_nodes[p].size(); j < nodes.size(); ++j) {
+    for (size_t j = own_nodes[p].size(); j + s.inert_ghosts < nodes.size(); ++j) {
       const int n = nodes[j], q = owner[n];
       recv[q].push_back(static_cast<int>(j));
       sends[q][p].push_back(own_index[n]);

@@ -17,16 +17,20 @@
 //               element holding a node of E1 (so that the masses of the nodes its interfaces join,
 //               which set their springs' stable step, are complete);
 //   nodes:      the nodes of those elements: its own, then the ghosts.
+// Of the ghost elements only those at an own node need their bulk force (HostMesh::bulk_elems:
+// they come right after the own ones); the others carry an interface's other side or a mass.
+// Likewise only the ghost nodes a step reads (of the elements with a bulk force and of the
+// interfaces) are exchanged; the rest (SubMesh::inert_ghosts, last) keep their first positions.
 // A cut interface is thus computed by every part that owns one of its nodes, from the same
 // positions (the ghosts' are the owners' to the bit after each exchange) and the same history, so
 // its forces and its damage history are the same on each of them bit for bit: each part keeps the
 // forces on its own nodes, and no force or history is ever sent. Ghost elements are computed too
 // (their forces on shared own nodes count); the forces on ghost nodes are dropped.
 //
-// Order of the local items: own elements (in the whole mesh's order), then ghost elements; own
-// nodes, then ghost nodes; counted interfaces, then the others (each group in the whole mesh's
-// order, so that interfaces stay in order of their side-A element where every node has one
-// element: the force pass's chunks). The reductions of a step (energies, counts) run over the first
+// Order of the local items: own elements, ghost elements with a bulk force, the other ghost
+// elements (each group in the whole mesh's order); own nodes, exchanged ghosts, inert ghosts;
+// counted interfaces, then the others (each group in order of its side-A element's local index:
+// the force pass's chunks, where every node has one element). The reductions of a step (energies, counts) run over the first
 // owned_* items (HostMesh::owned_*), so that every item is summed by exactly one part.
 #include <vector>
 
@@ -46,6 +50,9 @@ struct SubMesh {
   // receive list from p.
   std::vector<int> neighbours;
   std::vector<std::vector<int>> send, recv;
+  // The last inert_ghosts nodes: ghosts that no step reads (nodes only of ghost elements without
+  // a bulk force, in no local interface): never exchanged, they stay where they start.
+  int inert_ghosts = 0;
   int ghost_nodes() const { return mesh.num_nodes() - mesh.owned_nodes; }
   int ghost_elems() const { return mesh.num_elems() - mesh.owned_elems; }
 };

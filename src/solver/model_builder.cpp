@@ -301,6 +301,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     m.nn_own = mesh.owned_nodes;
     m.ne_own = mesh.owned_elems;
     m.ni_own = mesh.owned_ifaces;
+    m.ne_bulk = mesh.bulk_elems;
     // A point load is shared by its set's nodes, which a part holds only some of; contact across
     // parts needs ghost surfaces: neither is there yet (docs/parallel.md).
     if (!c.point_loads.empty())
