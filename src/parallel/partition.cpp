@@ -408,6 +408,16 @@ std::string partition_report_text(const nlohmann::json& r) {
       ni ? 100.0 * r.value("interfaces_cut", 0L) / ni : 0.0, r.value("shared_faces_cut", 0L),
       r.value("ghosts", 0L), r.value("ghost_nodes", 0L));
   t += buf;
+  if (r.contains("decomposition")) {  // partition_case: what a run over processes holds and sends
+    const auto& d = r["decomposition"];
+    std::snprintf(buf, sizeof buf,
+                  "run over %d processes: ghost nodes %ld (%ld needed by interfaces and own nodes' elements), "
+                  "bytes sent per step %ld, at most %ld by one process, at most %ld neighbours\n",
+                  r.value("parts", 0), d.value("ghost_nodes", 0L), d.value("ghost_nodes_needed", 0L),
+                  d.value("send_bytes_per_step", 0L), d.value("send_bytes_per_step_most", 0L),
+                  d.value("neighbours_most", 0L));
+    t += buf;
+  }
   t += "  part  elements      load    ghosts  ghost nodes\n";
   const auto &el = r["elements_per_part"], &ld = r["load_per_part"], &gh = r["ghosts_per_part"],
              &gn = r["ghost_nodes_per_part"];

@@ -1,6 +1,8 @@
 // `fdem partition` (partition.hpp: partition_case): the case's mesh as a run prepares it, its
 // partition, the statistics, and the files partition.json and partition.vtk.
+#include <algorithm>
 #include <chrono>
+#include <numeric>
 #include <cstring>
 #include <filesystem>
 
@@ -9,6 +11,7 @@
 #include "io/hdf5_util.hpp"
 #include "io/output.hpp"
 #include "mesh/mesh.hpp"
+#include "parallel/decompose.hpp"
 #include "parallel/partition.hpp"
 #include "solver/run.hpp"
 
@@ -59,6 +62,44 @@ Frame read_last_frame(const std::string& path, const HostMesh& mesh) {
   return fr;
 }
 
+// What `fdem run` under mpirun would hold and send with this partition (parallel/decompose.hpp):
+// per part its elements with the ghosts, its ghost nodes, the bytes it sends per step (dim doubles
+// per node) and its neighbours; and the ghost nodes a part needs for its interfaces and for the
+// elements at its own nodes, against those it holds (the rest come with the ghost elements' bulk
+// forces, which no own node needs where every node has one element).
+nlohmann::json decomposition_json(const HostMesh& mesh, const std::vector<int>& part, int parts) {
+  const std::vector<SubMesh> subs = decompose(mesh, part, parts);
+  const int D = mesh.dim;
+  std::vector<long> local, ghosts, sent, nbrs, needed;
+  for (const SubMesh& sm : subs) {
+    const HostMesh& m = sm.mesh;
+    local.push_back(m.num_elems());
+    ghosts.push_back(sm.ghost_nodes());
+    long bytes = 0;
+    for (const auto& l : sm.send) bytes += static_cast<long>(l.size()) * D * static_cast<long>(sizeof(double));
+    sent.push_back(bytes);
+    nbrs.push_back(static_cast<long>(sm.neighbours.size()));
+    std::vector<char> need(m.num_nodes(), 0);
+    for (int n : m.ifaces) need[n] = 1;
+    for (int e = 0; e < m.num_elems(); ++e) {
+      bool own = false;
+      for (int a = 0; a <= D; ++a) own = own || m.elems[(D + 1) * e + a] < m.owned_nodes;
+      if (own)
+        for (int a = 0; a <= D; ++a) need[m.elems[(D + 1) * e + a]] = 1;
+    }
+    long k = 0;
+    for (int n = m.owned_nodes; n < m.num_nodes(); ++n) k += need[n];
+    needed.push_back(k);
+  }
+  auto total = [](const std::vector<long>& v) { return std::accumulate(v.begin(), v.end(), 0L); };
+  auto most = [](const std::vector<long>& v) { return v.empty() ? 0L : *std::max_element(v.begin(), v.end()); };
+  return {{"local_elements_per_part", local},   {"ghost_nodes_per_part", ghosts},
+          {"send_bytes_per_step_per_part", sent}, {"neighbours_per_part", nbrs},
+          {"send_bytes_per_step", total(sent)},  {"send_bytes_per_step_most", most(sent)},
+          {"neighbours_most", most(nbrs)},       {"ghost_nodes", total(ghosts)},
+          {"ghost_nodes_needed", total(needed)}};
+}
+
 }  // namespace
 
 nlohmann::json partition_case(const std::string& case_path, const std::vector<std::string>& overrides,
@@ -79,6 +120,7 @@ nlohmann::json partition_case(const std::string& case_path, const std::vector<st
   s.seconds = seconds;
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"method", partition_method_name(method)}};
   report.update(partition_stats_json(s));
+  report["decomposition"] = decomposition_json(mesh, part, parts);
   if (!snapshot.empty()) {  // the rebalance at the snapshot's last frame
     const Frame fr = read_last_frame(snapshot, mesh);
     const HostMesh moved = moved_mesh(mesh, fr.x, fr.damage);
