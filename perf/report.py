@@ -896,6 +896,97 @@ class Report:
                "the contact's arrays, kept for every face that may become a surface, about 0.6 kB).")
         self.w()
 
+    def mpi_section(self):
+        """Issue 20: runs over several processes (perf/mpi_scaling.py writes mpi_scaling.json)."""
+        self.w("## 10. Runs over several processes (MPI)")
+        self.w()
+        d = load(os.path.join(self.res, "mpi_scaling.json"))
+        if not d:
+            self.w("(missing: mpi_scaling.json, from `perf/mpi_scaling.py build/mpi/fdem`: an MPI build, "
+                   "`scripts/mpi_check` makes one)")
+            self.w()
+            return
+        self.w("The 3D impact with contact off (runs over several processes have no contact yet, "
+               "docs/parallel.md), one thread per process, each process count run three times "
+               "interleaved (medians). Strong: the same mesh on every count; weak: h = 3 mm / n^(1/3), "
+               "about 12 600 tetrahedra per process. **This machine has 2 cores: 3 and 4 processes "
+               "oversubscribe it, so their rows show what oversubscription costs, not scaling.** "
+               "Speed-up (strong) is the single process's loop time over this one; efficiency (weak) "
+               "the single process's time per step and per element over this count's at one "
+               "process's share. Bytes: the ghost positions all processes send per step, and the most "
+               "one of them sends; exchange: the seconds the slowest process spent in the exchange "
+               "(pack, MPI, unpack: waiting for its neighbours counts there).")
+        self.w()
+        rows, base = [], {}
+        for r in d["rows"]:
+            if r["processes"] == 1:
+                base[r["kind"]] = r
+            b = base.get(r["kind"])
+            ns = r["loop_s"] / (r["steps"] * r["elements"]) * 1e9
+            if not b:
+                su = ""
+            elif r["kind"] == "strong":
+                su = f"{b['loop_s'] / r['loop_s']:.2f} x"
+            else:
+                su = f"{b['loop_s'] / r['loop_s'] * (r['elements'] / r['processes']) / b['elements']:.2f}"
+            rows.append([r["kind"], r["processes"], f"{r['h'] * 1e3:.2f}", f"{r['elements']:,}", f"{r['loop_s']:.2f}",
+                         f"{ns:.0f}", su, f"{r['bytes_per_step']:,.0f}; {r['bytes_per_step_most']:,.0f}",
+                         f"{r['exchange_s_most']:.2f}"])
+        self.w(table(["scaling", "processes", "h (mm)", "tetrahedra", "loop (s)", "ns per element-step",
+                      "speed-up / efficiency", "bytes per step (all; most)", "exchange (s)"], rows))
+        self.w()
+        self.w(f"{d['machine']}; {d['rows'][0]['steps']} steps; command: `{d['command']}`.")
+        self.w()
+        decs = d.get("decompositions") or []
+        if not decs:
+            return
+        self.w("The exchange of larger decompositions (`fdem partition`, which reports what a run over that "
+               "many processes would hold and send; the 3D impact at h = 1.5 mm, METIS):")
+        self.w()
+        self.w(table(["parts", "tetrahedra per part", "bytes sent per step (all)", "most by one part",
+                      "neighbours (most)", "ghost nodes exchanged / held"],
+                     [[x["parts"], f"{x['elements'] / x['parts']:,.0f}", f"{x['send_bytes_per_step']:,}",
+                       f"{x['send_bytes_per_step_most']:,}", x["neighbours_most"],
+                       f"{x['ghost_nodes_needed']:,} / {x['ghost_nodes']:,}"] for x in decs]))
+        self.w()
+        ref = next((x for x in decs if x["parts"] == 8), decs[-1])
+        e_ref = ref["elements"] / ref["parts"]
+        # the model: stated assumptions, the measured exchange scaled by the surface law
+        bw_mem, traffic = 4.8e12, 840.0  # H200 HBM bytes/s; compulsory bytes per tetrahedron-step, force pass (section 2)
+        links = {"8 GPUs, one node (NVLink, 450 GB/s a direction)": 450e9,
+                 "64 GPUs, 8 nodes (InfiniBand NDR, 50 GB/s a GPU)": 50e9}
+        latency, nbrs = 2e-6, 26
+        model = []
+        for per in (1e7, 1e8):
+            tc = per * traffic / bw_mem
+            bx = ref["send_bytes_per_step_most"] * (per / e_ref) ** (2 / 3) * 2
+            for name, bw in links.items():
+                tx = bx / bw + nbrs * latency
+                model.append([f"{per:.0e}", name, f"{tc * 1e3:.2f}", f"{bx / 1e6:.1f}", f"{tx * 1e3:.3f}",
+                              f"{tc / (tc + tx):.2f}"])
+        self.w("**A model of weak scaling to 8 and 64 GPUs** (no GPU has run this; every constant is an "
+               "assumption stated here, the only measured input is the exchange above). Per step a GPU "
+               "moves 840 B per tetrahedron at the H200's memory bandwidth (4.8 TB/s): the force pass's "
+               "compulsory traffic alone (section 2), less than a whole step moves, so the compute time "
+               "and with it the efficiency below are lower bounds. Then it sends its ghost positions: the most one "
+               f"part sends at {ref['parts']} parts ({ref['send_bytes_per_step_most']:,} B for "
+               f"{e_ref:,.0f} tetrahedra, an octant of the sphere with 3 cut faces), scaled with the "
+               "surface, (E / E_8)^(2/3), and doubled for a part inside a large body (6 cut faces); "
+               f"{nbrs} neighbours at {latency * 1e6:.0f} us each; no overlap of the exchange with "
+               "the computation (the code does none yet), no host staging (a CUDA-aware MPI).")
+        self.w()
+        self.w(table(["tetrahedra per GPU", "machines", "compute (ms per step)", "sent (MB per step)",
+                      "exchange (ms)", "efficiency"], model))
+        self.w()
+        cross = [1 - float(m[5]) for m in model if m[1].startswith("64")]
+        near = [1 - float(m[5]) for m in model if m[1].startswith("8 ")]
+        self.w(f"So within a node the exchange costs {100 * min(near):.0f}-{100 * max(near):.0f} % of a step; "
+               f"across nodes {100 * min(cross):.0f}-{100 * max(cross):.0f} % at the bandwidth bound, which "
+               "overlapping the exchange with the computation of the elements away from the cut (they read "
+               "no ghost) would hide. An MPI that is not CUDA-aware adds two host copies of the same bytes "
+               "per step.")
+        self.w()
+
     def summary(self):
         self.w("## Checks")
         self.w()
@@ -918,6 +1009,7 @@ class Report:
         self.brazil_section()
         self.timestep_section()
         self.setup_section()
+        self.mpi_section()
         body = self.lines[body_start:]
         self.lines = self.lines[:body_start]
         self.summary()

@@ -1,0 +1,139 @@
+#!/usr/bin/env python3
+"""Strong and weak scaling of runs over several processes (docs/performance.md section 10).
+
+    perf/mpi_scaling.py FDEM_MPI [--steps N] [--h H] [--procs 1,2,3,4] [--reps R] [--out FILE]
+    perf/mpi_scaling.py --markdown [--out FILE]
+
+FDEM_MPI: fdem built with -DFDEM_ENABLE_MPI=ON (scripts/mpi_check builds build/mpi/fdem). The 3D
+impact with contact off (a run over several processes has no contact yet), N steps (default 1000:
+the flight and the first impact), one thread per process, the process counts interleaved R times
+(default 3: medians) so that the machine's load falls on all alike:
+  strong: element size H (default 2.5 mm, about 21 000 tetrahedra) on every count;
+  weak:   element size 3 mm / n^(1/3) on n processes: about 12 600 tetrahedra per process
+          (efficiency: the time per step at one process's share, against the single process's).
+From summary.json: the time loop's wall time, the exchange's bytes per step (all processes, and
+the most one process sends) and its seconds on the slowest process. A machine with 2 cores shows
+no speed-up beyond 2 processes: the figures above 2 say what oversubscription costs, not scaling.
+Also the exchange of larger decompositions without running them: `fdem partition` of the 3D
+impact at h = 1.5 mm (90 150 tetrahedra) into 2, 8 and 64 parts (METIS): the bytes each part
+would send per step, the input of the weak-scaling model in docs/performance.md section 10.
+"""
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+CASE = os.path.join(ROOT, "cases/particle_impact_3d/case.json")
+SETS = ['contact={"enabled": false}', "output.snapshot_count=0", "output.fragments=false"]
+
+
+def arg(name, default):
+    return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
+def run(fdem, n, h, steps):
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [fdem, "run", CASE, "--out", out, "--quiet", "--set", f"parameters.h={h}",
+               "--set", f"time.max_steps={steps}"]
+        for s in SETS:
+            cmd += ["--set", s]
+        if n > 1:
+            cmd = ["mpirun", "--oversubscribe", "-n", str(n)] + cmd
+            if os.geteuid() == 0:
+                cmd.insert(1, "--allow-run-as-root")
+        env = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false", GOMP_SPINCOUNT="1000")
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
+        with open(os.path.join(out, "summary.json")) as f:
+            s = json.load(f)
+    p = s.get("processes", {})
+    return {"elements": s["counts"]["elements"], "steps": s["steps"], "loop_s": s["loop_wall_seconds"],
+            "bytes_per_step": p.get("exchange_bytes_per_step", 0.0),
+            "bytes_per_step_most": p.get("exchange_bytes_per_step_most", 0.0),
+            "exchange_s_most": p.get("exchange_seconds_most", 0.0)}
+
+
+def measure(fdem):
+    steps = int(arg("--steps", "1000"))
+    h = float(arg("--h", "0.0025"))
+    procs = [int(x) for x in arg("--procs", "1,2,3,4").split(",")]
+    reps = int(arg("--reps", "3"))
+    configs = [("strong", n, h) for n in procs] + [("weak", n, round(0.003 / n ** (1 / 3), 6)) for n in procs]
+    got = {c: [] for c in configs}
+    for _ in range(reps):
+        for c in configs:
+            got[c].append(run(fdem, c[1], c[2], steps))
+    rows = []
+    for (kind, n, hh), rs in got.items():
+        med = lambda k: statistics.median(r[k] for r in rs)
+        rows.append({"kind": kind, "processes": n, "h": hh, "elements": rs[0]["elements"], "steps": rs[0]["steps"],
+                     "loop_s": med("loop_s"), "loop_s_all": [r["loop_s"] for r in rs],
+                     "bytes_per_step": rs[0]["bytes_per_step"], "bytes_per_step_most": rs[0]["bytes_per_step_most"],
+                     "exchange_s_most": med("exchange_s_most")})
+    load = os.getloadavg()
+    return {"machine": f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
+            "command": " ".join(["perf/mpi_scaling.py"] + sys.argv[1:]), "rows": rows,
+            "decompositions": decompositions(fdem)}
+
+
+def decompositions(fdem, h=0.0015, parts=(2, 8, 64)):
+    out = []
+    for n in parts:
+        with tempfile.TemporaryDirectory() as d:
+            r = subprocess.run([fdem, "partition", CASE, "--parts", str(n), "--set", f"parameters.h={h}", "--out", d],
+                               capture_output=True, text=True, env=dict(os.environ, OMP_NUM_THREADS="2"))
+            if r.returncode != 0:
+                raise SystemExit(f"fdem partition: exit {r.returncode}\n{r.stderr[-2000:]}")
+            with open(os.path.join(d, "partition.json")) as f:
+                p = json.load(f)
+        dec = p["decomposition"]
+        out.append({"parts": n, "h": h, "method": p["method"], "elements": p["elements"],
+                    "send_bytes_per_step": dec["send_bytes_per_step"],
+                    "send_bytes_per_step_most": dec["send_bytes_per_step_most"],
+                    "neighbours_most": dec["neighbours_most"], "ghost_nodes": dec["ghost_nodes"],
+                    "ghost_nodes_needed": dec["ghost_nodes_needed"]})
+    return out
+
+
+def markdown(res):
+    lines = ["| scaling | processes | h (mm) | tetrahedra | loop (s, median) | ns per element-step | "
+             "speed-up / efficiency | bytes exchanged per step (all; most into one process) | exchange (s, slowest) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    base = {}
+    for r in res["rows"]:
+        ns = r["loop_s"] / (r["steps"] * r["elements"]) * 1e9
+        if r["processes"] == 1:
+            base[r["kind"]] = r
+        b = base.get(r["kind"])
+        if r["kind"] == "strong":
+            su = f"{b['loop_s'] / r['loop_s']:.2f} x" if b else ""
+        else:  # weak: time per step at the same elements per process
+            su = f"{b['loop_s'] / r['loop_s'] * (r['elements'] / r['processes']) / b['elements']:.2f}" if b else ""
+        lines.append(f"| {r['kind']} | {r['processes']} | {r['h'] * 1e3:.2f} | {r['elements']} | {r['loop_s']:.2f} | "
+                     f"{ns:.0f} | {su} | {r['bytes_per_step']:.0f}; {r['bytes_per_step_most']:.0f} | "
+                     f"{r['exchange_s_most']:.2f} |")
+    return "\n".join(lines) + f"\n\n{res['machine']}; `{res['command']}`\n"
+
+
+def main():
+    out = arg("--out", os.path.join(ROOT, "perf/results/mpi_scaling.json"))
+    if "--markdown" in sys.argv:
+        with open(out) as f:
+            print(markdown(json.load(f)))
+        return 0
+    if len(sys.argv) < 2 or sys.argv[1].startswith("--"):
+        print(__doc__)
+        return 2
+    res = measure(os.path.abspath(sys.argv[1]))
+    with open(out, "w") as f:
+        json.dump(res, f, indent=1)
+    print(markdown(res))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
