@@ -27,6 +27,9 @@ class Comm {
   virtual void exchange(const std::vector<int>& neighbours, const Kokkos::View<double*>& send,
                         const std::vector<int>& send_off, const Kokkos::View<double*>& recv,
                         const std::vector<int>& recv_off, int per) const = 0;
+  // Every process's `mine`, one after the other in process order, into `all` on process 0 (the
+  // others' `all` is left as it is).
+  virtual void gather(const std::vector<double>& mine, std::vector<double>& all) const = 0;
   // Whether the MPI passes device buffers without host copies (CUDA-aware); "" when unknown.
   virtual std::string gpu_aware() const = 0;
   // Ends every process of the run now (after an error on one of them: the others would wait for it).

@@ -42,7 +42,7 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   } else {
     if (writes_) history_->open(out, false);
     if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
-    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr);
+    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   counts_ = mesh_report(*mesh_);
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)

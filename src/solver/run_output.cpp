@@ -169,9 +169,13 @@ nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
 
 template <int D>
 RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh,
-                              const RunState* restart) {
+                              const RunState* restart, bool writes) {
   if (restart) last_step_ = static_cast<long>(restart->last_snapshot_step);
   if (!(c.snapshot_interval > 0)) return;
+  if (!writes) {
+    gathers_ = true;
+    return;
+  }
   if (restart) {
     const std::vector<long> steps(restart->snapshot_steps.begin(), restart->snapshot_steps.end());
     std::string note;
@@ -190,9 +194,10 @@ RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostM
 
 template <int D>
 void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
-  if (!writer_ || sim.step_count == last_step_) return;
+  if ((!writer_ && !gathers_) || sim.step_count == last_step_) return;
   last_step_ = sim.step_count;
-  sim.download(x_, u_, v_, stress_, damage_);
+  sim.download(x_, u_, v_, stress_, damage_);  // over several processes: gathered on process 0
+  if (!writer_) return;
   SnapshotFrame fr;
   fr.time = sim.t;
   fr.step = sim.step_count;

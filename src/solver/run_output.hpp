@@ -83,7 +83,10 @@ class RunSnapshots {
  public:
   // restart: continue the file with the frames the checkpoint lists (a warning on stderr when
   // that cannot be done and a new file is started).
-  RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh, const RunState* restart);
+  // writes = false: a process of a run over several that does not write (not process 0): it takes
+  // part in every frame's gathering (Simulation::download) and writes nothing.
+  RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh, const RunState* restart,
+               bool writes = true);
   bool on() const { return writer_ != nullptr; }
   int frames() const { return writer_ ? writer_->frames() : 0; }
   // A frame of the present state, unless there is one of this step already.
@@ -92,6 +95,7 @@ class RunSnapshots {
 
  private:
   std::unique_ptr<SnapshotWriter> writer_;
+  bool gathers_ = false;  // takes part in the frames without writing them
   long last_step_ = -1;
   std::vector<double> x_, u_, v_, stress_, damage_;
   std::vector<int> fragment_;

@@ -134,7 +134,9 @@ class Simulation {
   const std::vector<std::array<double, 3>>& reactions() const { return reactions_; }
   void set_sample_reactions(bool on) { sample_reactions_ = on; }
 
-  // Host copies for snapshots.
+  // Host copies for snapshots. Over several processes (set_decomposition) every process must call
+  // it: the own items are gathered into the whole mesh's order on process 0, whose arrays are then
+  // the whole run's; the others' are left empty.
   void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                 std::vector<double>& stress, std::vector<double>& damage);
 
@@ -172,6 +174,12 @@ class Simulation {
   ForceScatter<D> scatter_;
   std::shared_ptr<const Comm> comm_;  // null: one process
   std::unique_ptr<Halo<D>> halo_;
+  // over several processes: the whole mesh's index of each own node, element and interface, and
+  // the whole mesh's counts
+  std::vector<int> node_global_, elem_global_, iface_global_;
+  long whole_nn_ = 0, whole_ne_ = 0, whole_ni_ = 0;
+  void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
+                    std::vector<double>& stress, std::vector<double>& damage);
   void exchange_ghosts();
   // Sums over the processes in place (nothing on one process).
   void sum_over_processes(double* v, int n) const {

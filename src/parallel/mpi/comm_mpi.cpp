@@ -70,6 +70,17 @@ class MpiComm final : public Comm {
     MPI_Waitall(2 * nb, req_.data(), MPI_STATUSES_IGNORE);
     if (!direct_) Kokkos::deep_copy(recv, hr_);
   }
+  void gather(const std::vector<double>& mine, std::vector<double>& all) const override {
+    const int n = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<size_t>(size_)), displs(static_cast<size_t>(size_), 0);
+    MPI_Gather(&n, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (rank_ == 0) {
+      for (int r = 1; r < size_; ++r) displs[r] = displs[r - 1] + counts[r - 1];
+      all.resize(static_cast<size_t>(displs[size_ - 1]) + counts[size_ - 1]);
+    }
+    MPI_Gatherv(mine.data(), n, MPI_DOUBLE, rank_ == 0 ? all.data() : nullptr, counts.data(), displs.data(),
+                MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
   std::string gpu_aware() const override {
     if (Kokkos::SpaceAccessibility<Kokkos::HostSpace, Kokkos::View<double*>::memory_space>::accessible)
       return "not needed (host backend)";
