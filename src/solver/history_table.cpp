@@ -14,7 +14,7 @@ const char* const kAxes[3] = {"x", "y", "z"};
 }  // namespace
 
 template <int D>
-HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulation<D>& sim)
+HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulation<D>& sim, const HostMesh* part)
     : c_(c) {
   const int np = sim.m.platens.count;
   peak_.assign(np, 0.0);
@@ -22,7 +22,7 @@ HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulat
   srf_ = c.srf_initial != 1.0 || c.srf_rate > 0;
   for (int p = 0; p < np; ++p)
     if (sim.platen_names()[p] == c.stop_platen) stop_platen_ = p;
-  add_columns(sim, mesh);
+  add_columns(sim, mesh, part);
   set_load_window(c, mesh);
 }
 
@@ -58,7 +58,7 @@ void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh) {
 }
 
 template <int D>
-void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh) {
+void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh, const HostMesh* part) {
   cols_ = {"time [s]", "step"};
   for (const auto& name : sim.platen_names()) {
     cols_.push_back(name + "_displacement [m]");
@@ -68,7 +68,8 @@ void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh
   for (const auto& name : sim.bc_names())
     for (int k = 0; k < D; ++k) cols_.push_back(name + "_reaction_" + kAxes[k] + " [N]");
   for (const auto& name : c_.monitors) {
-    const auto& nodes = mesh.node_sets.at(name);
+    monitor_count_.push_back(static_cast<long>(mesh.node_sets.at(name).size()));
+    const auto& nodes = (part ? *part : mesh).node_sets.at(name);
     Kokkos::View<int*> v("fdem::monitor", nodes.size());
     auto vh = Kokkos::create_mirror_view(v);
     for (size_t j = 0; j < nodes.size(); ++j) vh(j) = nodes[j];
@@ -110,9 +111,15 @@ std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim) {
   }
   for (const auto& r : sim.reactions())
     for (int k = 0; k < D; ++k) row.push_back(r[k]);
-  for (const auto& nodes : monitor_nodes_) {
+  for (size_t i = 0; i < monitor_nodes_.size(); ++i) {
     double u[3];
-    node_list_displacement<D>(sim.m, nodes, u);
+    node_list_displacement<D>(sim.m, monitor_nodes_[i], u);
+    if (const Comm* comm = sim.comm()) {  // each process's own nodes of the set: the mean over all
+      const double here = static_cast<double>(monitor_nodes_[i].extent(0));
+      for (int k = 0; k < 3; ++k) u[k] *= here;
+      comm->sum(u, 3);
+      for (int k = 0; k < 3; ++k) u[k] /= static_cast<double>(std::max(1L, monitor_count_[i]));
+    }
     for (int k = 0; k < D; ++k) row.push_back(u[k]);
   }
   if (srf_) row.push_back(srf_at(last_.time));

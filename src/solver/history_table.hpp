@@ -27,7 +27,9 @@ namespace fdem {
 template <int D>
 class HistoryTable {
  public:
-  HistoryTable(const Case& c, const HostMesh& mesh, const Simulation<D>& sim);
+  // part: a run over several processes (sim built from part's mesh; mesh is the whole one): the
+  // monitors' node lists are the part's own nodes, their mean taken over all processes.
+  HistoryTable(const Case& c, const HostMesh& mesh, const Simulation<D>& sim, const HostMesh* part = nullptr);
 
   const std::vector<std::string>& columns() const { return cols_; }
   // Strength reduction: the case has a schedule, and the factor at time t.
@@ -70,7 +72,7 @@ class HistoryTable {
   void restore(const RunState& s, const std::string& file);
 
  private:
-  void add_columns(const Simulation<D>& sim, const HostMesh& mesh);
+  void add_columns(const Simulation<D>& sim, const HostMesh& mesh, const HostMesh* part);
   std::vector<double> make_row(const Simulation<D>& sim);
   std::string joined_columns() const;
   void set_load_window(const Case& c, const HostMesh& mesh);
@@ -78,6 +80,7 @@ class HistoryTable {
   const Case& c_;
   std::vector<std::string> cols_;
   std::vector<Kokkos::View<int*>> monitor_nodes_;
+  std::vector<long> monitor_count_;  // nodes in each monitored set (the whole mesh's)
   bool srf_ = false;
   int stop_platen_ = -1;
   std::unique_ptr<HistoryWriter> file_;

@@ -129,7 +129,6 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   if (!opt.restart.empty()) throw InputError("--restart" + why);
   if (opt.checkpoint_every > 0 || (opt.checkpoint_every < 0 && c.checkpoint_every > 0))
     throw InputError(c.file + ": output.checkpoint_every (checkpoints)" + why + "; set it to 0");
-  if (!c.monitors.empty()) throw InputError(c.file + ": monitors" + why);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   std::unique_ptr<OutputLock> lock;
   if (comm.rank() == 0) {

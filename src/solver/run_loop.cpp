@@ -36,7 +36,7 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   if (restart) sim_.load_state(*restart);
-  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_);
+  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, part ? &part->mesh : nullptr);
   if (restart) {
     restore(*restart);
   } else {
