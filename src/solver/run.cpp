@@ -137,8 +137,6 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
   }
   HostMesh mesh = prepare_mesh(c);
-  if (c.output_fragments && mesh.num_ifaces() > 0)
-    throw InputError(c.file + ": output.fragments (the fragment analysis)" + why + "; set it to false");
   const RunIdentity id{case_hash(c), mesh_hash(mesh)};
   if (comm.rank() == 0) remove_old_outputs(out);
   resolve_defaults(c, mesh);

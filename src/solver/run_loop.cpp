@@ -41,7 +41,9 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
     restore(*restart);
   } else {
     if (writes_) history_->open(out, false);
-    if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out);
+    if (fragments_on())
+      frag_ = part ? std::make_unique<RunFragments<D>>(sim_, c, *mesh_, out, writes_)
+                   : std::make_unique<RunFragments<D>>(sim_.m, out);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   counts_ = mesh_report(*mesh_);

@@ -43,7 +43,9 @@ class RunLoop {
   void final_row();
   void save_checkpoint();
   nlohmann::json interrupted();
-  bool fragments_on() const { return c_.output_fragments && sim_.m.ni > 0; }
+  // (the whole mesh's interfaces while it is there: a part of a run over several processes may
+  // have none)
+  bool fragments_on() const { return c_.output_fragments && (mesh_ ? mesh_->num_ifaces() : sim_.m.ni) > 0; }
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;

@@ -7,6 +7,7 @@
 #include "common/error.hpp"
 #include "solver/fragment_bodies.hpp"
 #include "solver/interface_materials.hpp"
+#include "solver/model_builder.hpp"
 
 namespace fdem {
 
@@ -84,7 +85,7 @@ std::vector<std::string> fragment_columns() {
 template <int D>
 RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out, const RunState* restart,
                               const std::string& file)
-    : analysis_(m), out_(out) {
+    : analysis_(std::make_unique<FragmentAnalysis<D>>(m)), out_(out) {
   bodies_ = initial_bodies<D>(m, body_);
   const std::vector<std::string> cols = fragment_columns();
   const std::string path = out + "/fragments.csv";
@@ -101,12 +102,67 @@ RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out, const R
 }
 
 template <int D>
+RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out,
+                              bool writes)
+    : comm_(sim.comm()), out_(out) {
+  if (whole.bodies > 1)
+    throw InputError(c.file + ": output.fragments (the fragment analysis) of " + std::to_string(whole.bodies) +
+                     " bodies is not available yet in a run over several processes (docs/parallel.md); set it "
+                     "to false");
+  if (!writes) return;
+  // the whole mesh's elements, masses and interfaces (the arrays the labelling reads)
+  whole_ = std::make_unique<Model<D>>();
+  Model<D>& w = *whole_;
+  w.nn = whole.num_nodes();
+  w.ne = whole.num_elems();
+  w.ni = whole.num_ifaces();
+  w.thickness = sim.m.thickness;
+  const MaterialTable mats = build_materials<D>(c, whole, w);
+  build_elements<D>(c, whole, mats, w);
+  w.iface = Kokkos::View<int* [2 * D]>("fdem::fragments::iface", w.ni);
+  w.ihist = Kokkos::View<double* [D][4]>("fdem::fragments::ihist", w.ni);
+  auto fc = Kokkos::create_mirror_view(w.iface);
+  for (int q = 0; q < w.ni; ++q)
+    for (int k = 0; k < 2 * D; ++k) fc(q, k) = whole.ifaces[static_cast<size_t>(q) * 2 * D + k];
+  Kokkos::deep_copy(w.iface, fc);
+  analysis_ = std::make_unique<FragmentAnalysis<D>>(w);
+  bodies_ = initial_bodies<D>(w, body_);
+  csv_ = std::make_unique<HistoryWriter>(out + "/fragments.csv", fragment_columns());
+}
+
+// Every process's counted interfaces' histories (with their whole-mesh indices) into whole_ on
+// process 0.
+template <int D>
+void RunFragments<D>::gather_histories(const Simulation<D>& sim) {
+  const auto& ids = sim.own_ifaces_global();
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  Kokkos::deep_copy(h, sim.m.ihist);
+  std::vector<double> mine, all;
+  mine.reserve(ids.size() * (1 + 4 * D));
+  for (size_t q = 0; q < ids.size(); ++q) {
+    mine.push_back(ids[q]);
+    for (int k = 0; k < D; ++k)
+      for (int a = 0; a < 4; ++a) mine.push_back(h(q, k, a));
+  }
+  comm_->gather(mine, all);
+  if (!whole_) return;
+  auto wh = Kokkos::create_mirror_view(whole_->ihist);
+  for (size_t j = 0; j < all.size(); j += 1 + 4 * D) {
+    const int q = static_cast<int>(all[j]);
+    for (int k = 0; k < D; ++k)
+      for (int a = 0; a < 4; ++a) wh(q, k, a) = all[j + 1 + 4 * k + a];
+  }
+  Kokkos::deep_copy(whole_->ihist, wh);
+}
+
+template <int D>
 const FragmentStats& RunFragments<D>::now(const Simulation<D>& sim) {
   if (step_ != sim.step_count) {
-    analysis_.compute(sim.m);
+    if (comm_) gather_histories(sim);
+    if (analysis_) analysis_->compute(whole_ ? *whole_ : sim.m);
     step_ = sim.step_count;
   }
-  return analysis_.last();
+  return analysis_ ? analysis_->last() : none_;
 }
 
 template <int D>
@@ -117,20 +173,21 @@ void RunFragments<D>::write_row(const Simulation<D>& sim, const Energies& e) {
                             double(fs.single_element)};
   for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_count[b]);
   for (int b = 0; b < kFragmentBins; ++b) fr.push_back(fs.bin_mass_fraction[b]);
-  csv_->row(fr);
+  if (csv_) csv_->row(fr);  // only process 0 writes (a run over several processes)
   rows_.insert(rows_.end(), fr.begin(), fr.end());
 }
 
 template <int D>
 void RunFragments<D>::element_ids(const Simulation<D>& sim, std::vector<int>& ids) {
   now(sim);
-  analysis_.element_ids(ids);
+  if (analysis_) analysis_->element_ids(ids);  // the whole mesh's, on process 0 of several
 }
 
 template <int D>
 nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
   const FragmentStats& fs = now(sim);
-  std::vector<double> masses = analysis_.masses();
+  if (!analysis_) return nullptr;  // a process that does not write
+  std::vector<double> masses = analysis_->masses();
   std::sort(masses.begin(), masses.end(), [](double a, double b) { return a > b; });
   std::vector<double> top;
   for (size_t i = 0; i < masses.size() && i < 10; ++i)
@@ -160,7 +217,7 @@ nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
   element_ids(sim, frag);
   std::vector<double> emass, centroid;
   element_mass_centroids<D>(sim.m, emass, centroid);
-  const auto b = body_fragments(body_, bodies_, frag, analysis_.masses(), emass, centroid);
+  const auto b = body_fragments(body_, bodies_, frag, analysis_->masses(), emass, centroid);
   write_bodies_csv(out_ + "/bodies.csv", b, D);
   return body_fragments_summary(b, out_ + "/bodies.csv");
 }
@@ -197,6 +254,7 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   if ((!writer_ && !gathers_) || sim.step_count == last_step_) return;
   last_step_ = sim.step_count;
   sim.download(x_, u_, v_, stress_, damage_);  // over several processes: gathered on process 0
+  if (frag) frag->element_ids(sim, fragment_);   // likewise
   if (!writer_) return;
   SnapshotFrame fr;
   fr.time = sim.t;
@@ -206,10 +264,7 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   fr.v = v_.data();
   fr.stress = stress_.data();
   fr.damage = damage_.data();
-  if (frag) {
-    frag->element_ids(sim, fragment_);
-    fr.fragment = fragment_.data();
-  }
+  if (frag) fr.fragment = fragment_.data();
   writer_->write(fr);
 }
 

@@ -57,6 +57,12 @@ class RunFragments {
   // `file` when its rows do not fit the columns.
   RunFragments(const Model<D>& m, const std::string& out, const RunState* restart = nullptr,
                const std::string& file = "");
+  // A run over several processes (sim.comm()): `whole` is the whole mesh. Process 0 (`writes`)
+  // keeps the whole mesh's elements and interfaces and labels its fragments from every process's
+  // interface histories, gathered at each call below (which every process makes, at the same
+  // steps); the others only send theirs. InputError for several initial bodies (their per-body
+  // statistics need the whole positions: not yet).
+  RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out, bool writes);
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
   // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null).
@@ -68,7 +74,11 @@ class RunFragments {
   void save(RunState& s) const { s.fragment_rows = rows_; }
 
  private:
-  FragmentAnalysis<D> analysis_;
+  std::unique_ptr<Model<D>> whole_;  // over several processes, on process 0: the whole mesh
+  std::unique_ptr<FragmentAnalysis<D>> analysis_;  // null on the processes that do not write
+  const Comm* comm_ = nullptr;
+  FragmentStats none_;
+  void gather_histories(const Simulation<D>& sim);
   std::string out_;
   std::vector<int> body_;  // initial body of every element (fragment_bodies.hpp)
   int bodies_ = 0;

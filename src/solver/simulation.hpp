@@ -101,6 +101,9 @@ class Simulation {
   // elements) is over all processes, the same on each.
   void set_decomposition(std::shared_ptr<const Comm> comm, const SubMesh& part);
   const Comm* comm() const { return comm_.get(); }
+  // Over several processes: the whole mesh's index of each counted interface (the first
+  // owned_ifaces() of m).
+  const std::vector<int>& own_ifaces_global() const { return iface_global_; }
   // Bytes of ghost positions this process sends per step (0 on one process).
   long exchange_bytes() const { return halo_ ? halo_->send_bytes() : 0; }
   // Work skipped because the scene does not need it (the results are the same either way; the
