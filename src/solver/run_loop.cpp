@@ -105,8 +105,8 @@ nlohmann::json RunLoop<D>::run() {
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
-    if (opt_.interrupt && *opt_.interrupt) {  // a signal (SIGINT, SIGTERM): stop after this step
-      signal_ = static_cast<int>(*opt_.interrupt);
+    if (const int sig = interrupt_signal()) {  // a signal (SIGINT, SIGTERM): stop after this step
+      signal_ = sig;
       return interrupted();
     }
     if (c_.max_steps > 0 && sim_.step_count >= c_.max_steps) {
@@ -138,14 +138,35 @@ nlohmann::json RunLoop<D>::run() {
 // the run had not stopped), a snapshot (dropped by such a restart), summary.json, a message. No
 // final history row: it would take one more step.
 template <int D>
+int RunLoop<D>::interrupt_signal() const {
+  const int here = opt_.interrupt ? static_cast<int>(*opt_.interrupt) : 0;
+  const Comm* comm = sim_.comm();
+  if (!comm) return here;
+  // Over several processes a signal reaches each at its own moment: they look together, every
+  // kInterruptPoll steps, and stop at the same step if any has one (else some would wait forever
+  // for the others' exchange).
+  if (sim_.step_count % kInterruptPoll != 0) return 0;
+  double v = -static_cast<double>(here);
+  comm->min(&v, 1);
+  return static_cast<int>(-v);
+}
+
+template <int D>
 nlohmann::json RunLoop<D>::interrupted() {
   const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
   progress_->done();
+  const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
+  if (sim_.comm()) {  // checkpoints of a run over several processes: not yet (docs/parallel.md)
+    snaps_->take(sim_, frag_.get());
+    if (writes_)
+      std::fprintf(stderr, "fdem: interrupted by %s at step %ld, t = %.6e s; no checkpoint (not available yet in a "
+                   "run over several processes)\n", name, sim_.step_count, sim_.t);
+    return finish("interrupted", loop_wall);
+  }
   save_checkpoint();
   snaps_->take(sim_, frag_.get());
   const std::string ck = out_ + "/checkpoint.h5";
-  const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
   std::fprintf(stderr,
                "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
                "run %s --restart %s (and the same --set options)\n",

@@ -43,6 +43,9 @@ class RunLoop {
   void final_row();
   void save_checkpoint();
   nlohmann::json interrupted();
+  // The signal that asks the run to stop (0: none); over several processes the same on each.
+  int interrupt_signal() const;
+  static constexpr long kInterruptPoll = 64;
   // (the whole mesh's interfaces while it is there: a part of a run over several processes may
   // have none)
   bool fragments_on() const { return c_.output_fragments && (mesh_ ? mesh_->num_ifaces() : sim_.m.ni) > 0; }

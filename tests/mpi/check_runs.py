@@ -236,6 +236,32 @@ def main():
             os.path.join(WORK, "unstable"), timeout=120)
     check(r.returncode == 3 and "numerical failure" in r.stderr,
           f"an unstable run ends every process: exit {r.returncode}")
+    # SIGTERM to mpirun (which passes it on to the processes): they stop together at the same step,
+    # process 0 writes summary.json (stop reason "interrupted"), nothing hangs
+    out = os.path.join(WORK, "interrupted")
+    cmd = ["mpirun", "--oversubscribe", "-n", "2", fdem, "run", os.path.join(ROOT, CASES["impact3d"][0]), "--out", out,
+           "--quiet", "--set", 'contact={"enabled": false}', "--set", "parameters.h=0.004",
+           "--set", "output.snapshot_count=0"]
+    if os.geteuid() == 0:
+        cmd.insert(1, "--allow-run-as-root")
+    p = subprocess.Popen(cmd, env=dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false"),
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    import time
+    t0 = time.time()
+    hist = os.path.join(out, "history.csv")
+    while time.time() - t0 < 60 and not (os.path.exists(hist) and sum(1 for _ in open(hist)) > 3):
+        time.sleep(0.2)
+    p.send_signal(15)
+    try:
+        _, err = p.communicate(timeout=60)
+        s = json.load(open(os.path.join(out, "summary.json")))
+        check(s.get("stop_reason") == "interrupted" and "interrupted by SIGTERM" in err,
+              f"SIGTERM to mpirun: stopped at step {s.get('steps')}, summary.json stop reason {s.get('stop_reason')}")
+    except subprocess.TimeoutExpired:
+        p.kill()
+        check(False, "SIGTERM to mpirun: the processes did not end within 60 s")
+    except (OSError, ValueError) as e:
+        check(False, f"SIGTERM to mpirun: no summary.json ({e})")
     if not keep:
         shutil.rmtree(WORK, ignore_errors=True)
     print(f"{'all checks passed' if not failures else str(len(failures)) + ' check(s) FAILED'}")
