@@ -44,6 +44,9 @@ struct HostMesh {
   // Its first bulk_elems elements have their bulk forces computed (the own ones and the ghosts at
   // an own node); the others only carry interfaces' sides and masses. -1: all.
   int bulk_elems = -1;
+  // The whole mesh's size of each node set (node_sets hold a part's own nodes only): a point load
+  // is shared by the whole set's nodes.
+  std::map<std::string, long> whole_set_size;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

@@ -181,6 +181,7 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
         m.iface_elems.push_back(elocal[whole.iface_elems[2 * static_cast<size_t>(q) + side]]);
     }
     for (const auto& [name, set] : whole.node_sets) {
+      m.whole_set_size[name] = static_cast<long>(set.size());
       auto& local = m.node_sets[name];
       for (int n : set)
         if (owner[n] == p) local.push_back(own_index[n]);

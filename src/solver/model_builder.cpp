@@ -302,11 +302,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     m.ne_own = mesh.owned_elems;
     m.ni_own = mesh.owned_ifaces;
     m.ne_bulk = mesh.bulk_elems;
-    // A point load is shared by its set's nodes, which a part holds only some of; contact across
-    // parts needs ghost surfaces: neither is there yet (docs/parallel.md).
-    if (!c.point_loads.empty())
-      throw InputError(c.file + ": point_loads: not yet available in a run over several processes "
-                       "(docs/parallel.md)");
+    // contact across parts needs ghost surfaces: not there yet (docs/parallel.md)
     if (contact_wanted(c, mesh))
       throw InputError(c.file + ": contact: contact across processes is not available yet (docs/parallel.md); "
                        "a run over several processes needs \"contact\": {\"enabled\": false}");

@@ -188,14 +188,17 @@ std::vector<double> build_point_loads(const Case& c, const HostMesh& mesh, Model
   auto fr_h = mirror(m.fext_ramp);
   for (const auto& pl : c.point_loads) {
     const auto& nodes = mesh.node_sets.at(pl.set);
+    // shared by the whole set's nodes (a part of a decomposed mesh holds its own ones only)
+    const double count = mesh.owned_nodes >= 0 ? static_cast<double>(mesh.whole_set_size.at(pl.set))
+                                               : static_cast<double>(nodes.size());
     if (pl.ramp_time > 0) {
       const size_t g =
           static_cast<size_t>(std::find(ramps.begin(), ramps.end(), pl.ramp_time) - ramps.begin());
       for (int i : nodes)
-        for (int k = 0; k < D; ++k) fr_h(g, i, k) += pl.force[k] / static_cast<double>(nodes.size());
+        for (int k = 0; k < D; ++k) fr_h(g, i, k) += pl.force[k] / count;
     } else {
       for (int i : nodes)
-        for (int k = 0; k < D; ++k) fe_h(i, k) += pl.force[k] / static_cast<double>(nodes.size());
+        for (int k = 0; k < D; ++k) fe_h(i, k) += pl.force[k] / count;
     }
   }
   Kokkos::deep_copy(m.fext, fe_h);

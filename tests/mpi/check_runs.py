@@ -7,7 +7,9 @@ FDEM: an fdem built with -DFDEM_ENABLE_MPI=ON. Each case runs on 1 process (no d
 the build without MPI does) and on 2, 3 and 4 (oversubscribed on a small machine, one thread
 each); history.csv must agree:
   - before the first damaged interface, every physical column to 1e-9 of its largest value (the
-    parts add each node's contributions in another order: round-off, measured 1e-13);
+    parts add each node's contributions in another order: round-off, measured 0 at history.csv's
+    ten digits), 1e-6 for the SEN beam with a point load (its platens amplify round-off as much
+    between thread counts);
   - the peak load of the Brazilian disc to 1e-9 relative (the issue's bound; measured 0); the 3D
     impact's, which comes after about 1 400 interfaces have damaged, to 1e-6 (measured 1e-8);
   - after the first damage, to 1e-5 of each column's largest value and the damaged count to 1 %
@@ -32,13 +34,22 @@ CASES = {
              COMMON + ["mesh.element_size=0.006", "parameters.gap=0", "parameters.approach_rate=4",
                        "parameters.approach=0.0004", "time.max_steps=1100", "output.history_rows=40000",
                        "output.snapshot_count=30"],
-             ["top_load [N]", "bottom_load [N]"], 1e-9),
+             ["top_load [N]", "bottom_load [N]"], 1e-9, 1e-9),
     # the 3D impact, coarse: the sphere hits the plate and cracks (about 1 500 damaged interfaces);
     # monitors: the mean displacement of all nodes and of the surface's (sums over the processes)
     "impact3d": ("cases/particle_impact_3d/case.json",
                  COMMON + ["parameters.h=0.006", "time.max_steps=1500", "output.history_rows=3000",
                            "output.snapshot_count=0", 'output.monitors=["all", "surface"]'],
-                 ["plate_load [N]", "all_uz [m]", "surface_uz [m]"], 1e-6),
+                 ["plate_load [N]", "all_uz [m]", "surface_uz [m]"], 1e-6, 1e-9),
+    # the SEN beam (platens, a pin, monitors) with a ramped point load added on its load point: the
+    # load is shared by the whole set's nodes, whichever process owns them. Intact throughout, but
+    # its platens touch a few nodes each, which amplifies round-off: one process on 1 and on 2
+    # threads differs by 3.5e-8 of the load (3 processes: 7.3e-8 of the platen energy), so 1e-6
+    "beam": ("cases/sen_beam/case.json",
+             COMMON + ["parameters.rate=0.01", "parameters.deflection=0.15e-3", "time.max_steps=3000",
+                       "output.snapshot_count=0",
+                       'boundary.point_loads=[{"set": "load_point", "force": [0, -500], "ramp_time": 1e-4}]'],
+             ["load_load [N]", "load_point_uy [m]", "mouth_right_ux [m]"], 1e-6, 1e-6),
 }
 # the 3D impact at 40 m/s, 4000 steps: it breaks into about 176 fragments (no contact between them:
 # they pass through each other, which does not matter to the counting). After that much fracture
@@ -107,7 +118,7 @@ def compare_frames(name, a, b, n):
           f"{name}, {n} processes: interface damage differs by at most {dd:.1e}, {(b[2] > 0).sum()} damaged in both")
 
 
-def compare(name, cols_main, peak_tol, base, other, n):
+def compare(name, cols_main, peak_tol, intact_tol, base, other, n):
     head, a = base
     head_b, b = other
     check(head == head_b and len(a) == len(b), f"{name}, {n} processes: the same columns and rows ({len(b)})")
@@ -127,7 +138,8 @@ def compare(name, cols_main, peak_tol, base, other, n):
                 intact = max(intact, d)
             after = max(after, d)
     check(first > 1, f"{name}: {first} rows before the first damage")
-    check(intact < 1e-9, f"{name}, {n} processes: intact, worst difference {intact:.1e} of the column's largest value (< 1e-9)")
+    check(intact < intact_tol,
+          f"{name}, {n} processes: intact, worst difference {intact:.1e} of the column's largest value (< {intact_tol:g})")
     check(after < 1e-5, f"{name}, {n} processes: whole run, worst difference {after:.1e} (< 1e-5)")
     da, db = a[-1][dmg], b[-1][dmg]
     check(abs(da - db) <= max(1.0, 0.01 * da), f"{name}, {n} processes: damaged interfaces {db:.0f} against {da:.0f}")
@@ -154,7 +166,7 @@ def main():
     mpi_line = next((l for l in info.stdout.splitlines() if l.startswith("MPI:")), "")
     print(mpi_line)
     check("processes" in mpi_line and "not in this build" not in mpi_line, "fdem info names the MPI")
-    for name, (case, sets, cols_main, peak_tol) in CASES.items():
+    for name, (case, sets, cols_main, peak_tol, intact_tol) in CASES.items():
         print(f"{name}: {case}")
         outs, frames, fragments = {}, {}, {}
         for n in (1, 2, 3, 4):
@@ -177,7 +189,7 @@ def main():
                       f"{p.get('exchange_bytes_per_step', 0):.0f} bytes exchanged per step")
         for n in (2, 3, 4):
             if 1 in outs and n in outs:
-                compare(name, cols_main, peak_tol, outs[1], outs[n], n)
+                compare(name, cols_main, peak_tol, intact_tol, outs[1], outs[n], n)
             if 1 in fragments and n in fragments:
                 (ha, fa), (hb, fb) = fragments[1], fragments[n]
                 j, k = ha.index("fragments"), ha.index("largest_fraction")
