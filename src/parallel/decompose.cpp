@@ -123,21 +123,18 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
     }
     // Ghost nodes: those a step reads (of the elements with a bulk force, of the interfaces) are
     // exchanged; the others (only of elements without one) never move from where they start.
-    for (int e : els) elocal[e] = 1;  // scratch: "local"
-    {
-      for (int j = 0; j < eb; ++j)
-        for (int a = 0; a < npe; ++a) nlocal[enode(els[j], a)] = 1;
-      for (int q : ifs)
-        for (int a = 0; a < 2 * D; ++a) nlocal[inode(q, a)] = 1;
-      std::sort(nds.begin(), nds.end(), [&](int a, int b) {
-        const bool ra = nlocal[a] == 1, rb = nlocal[b] == 1;
-        return ra != rb ? ra : a < b;
-      });
-      for (int n : nds) s.inert_ghosts += nlocal[n] != 1;
-      for (int n : nds) nlocal[n] = -1;
-      for (int n : own_nodes[p]) nlocal[n] = -1;
-    }
-    for (int e : els) elocal[e] = -1;
+    // (nlocal as scratch: 1 for a node a step reads)
+    for (int j = 0; j < eb; ++j)
+      for (int a = 0; a < npe; ++a) nlocal[enode(els[j], a)] = 1;
+    for (int q : ifs)
+      for (int a = 0; a < 2 * D; ++a) nlocal[inode(q, a)] = 1;
+    std::sort(nds.begin(), nds.end(), [&](int a, int b) {
+      const bool ra = nlocal[a] == 1, rb = nlocal[b] == 1;
+      return ra != rb ? ra : a < b;
+    });
+    for (int n : nds) s.inert_ghosts += nlocal[n] != 1;
+    for (int n : nds) nlocal[n] = -1;
+    for (int n : own_nodes[p]) nlocal[n] = -1;
     std::vector<int> nodes = own_nodes[p];
     nodes.insert(nodes.end(), nds.begin(), nds.end());
     // Interfaces: the counted ones, then the others; each group in order of its side-A element's
