@@ -17,9 +17,9 @@
 
 #include "common/error.hpp"
 #include "io/case.hpp"
+#include "kernels/halo.hpp"
 #include "mesh/mesh.hpp"
 #include "parallel/decompose.hpp"
-#include "kernels/halo.hpp"
 #include "parallel/partition.hpp"
 #include "solver/run.hpp"
 #include "solver/simulation.hpp"
@@ -182,6 +182,47 @@ Sums add(Sums s, const Energies& e, double force) {
 
 double rel(double a, double b) { return std::fabs(a - b) / std::max({std::fabs(a), std::fabs(b), 1e-300}); }
 
+// The parts of a decomposition stepped in one process: their models, their halos, the time step
+// agreed as a run over processes would (the smallest contributions of all parts) and the first
+// exchange. own_dt: each part's step before the agreement.
+template <int D>
+struct Parts {
+  std::vector<std::unique_ptr<Simulation<D>>> sims;
+  std::vector<Halo<D>> halos;
+  std::vector<const NodeData<D>*> nodes;
+  std::vector<double> own_dt;
+  Parts(const Case& c, const std::vector<SubMesh>& subs) {
+    StepContributions all;
+    for (const SubMesh& s : subs) {
+      sims.push_back(std::make_unique<Simulation<D>>(c, s.mesh));
+      halos.emplace_back(s.neighbours, s.send, s.recv);
+      own_dt.push_back(sims.back()->dt);
+      all =
+          sims.size() == 1 ? sims[0]->step_contributions() : smallest(all, sims.back()->step_contributions());
+    }
+    for (auto& s : sims) {
+      nodes.push_back(&s->m);
+      s->agree_time_step(all);
+    }
+    exchange();
+  }
+  void exchange() { exchange_in_process<D>(halos, nodes); }
+  // The largest distance of a node's position from the whole run's (x_ref: by whole-mesh index),
+  // over every part's own and exchanged ghost nodes (the inert ghosts are never read).
+  template <class HostX>
+  double worst_position(const std::vector<SubMesh>& subs, const HostX& x_ref) const {
+    double worst = 0;
+    for (size_t p = 0; p < subs.size(); ++p) {
+      auto x = Kokkos::create_mirror_view(sims[p]->m.x);
+      Kokkos::deep_copy(x, sims[p]->m.x);
+      for (int i = 0; i < subs[p].mesh.num_nodes() - subs[p].inert_ghosts; ++i)
+        for (int k = 0; k < D; ++k)
+          worst = std::max(worst, std::fabs(x(i, k) - x_ref(subs[p].node_global[i], k)));
+    }
+    return worst;
+  }
+};
+
 TEST(Decompose, PartsSteppedWithTheExchangeFollowTheWholeDisc) {
   HostMesh whole;
   const Case c = fast_disc(whole);
@@ -209,30 +250,19 @@ TEST(Decompose, PartsSteppedWithTheExchangeFollowTheWholeDisc) {
     SCOPED_TRACE(std::to_string(parts) + " parts");
     const std::vector<int> part = partition_elements(whole, parts, PartitionMethod::Rcb);
     const std::vector<SubMesh> subs = decompose(whole, part, parts);
-    std::vector<std::unique_ptr<Simulation<2>>> sims;
-    std::vector<Halo<2>> halos;
-    std::vector<const NodeData<2>*> nodes;
-    StepContributions all;
-    for (const SubMesh& s : subs) {
-      sims.push_back(std::make_unique<Simulation<2>>(c, s.mesh));
-      halos.emplace_back(s.neighbours, s.send, s.recv);
-      all =
-          sims.size() == 1 ? sims[0]->step_contributions() : smallest(all, sims.back()->step_contributions());
-      EXPECT_GE(sims.back()->dt, ref.dt);
-    }
-    for (auto& s : sims) {
-      nodes.push_back(&s->m);
-      s->agree_time_step(all);
+    Parts<2> parts_(c, subs);
+    auto& sims = parts_.sims;
+    for (size_t p = 0; p < sims.size(); ++p) {
+      EXPECT_GE(parts_.own_dt[p], ref.dt);
       // each part holds every element, interface and platen node that its own nodes' steps need
-      EXPECT_EQ(s->dt, ref.dt);
+      EXPECT_EQ(sims[p]->dt, ref.dt);
     }
-    exchange_in_process<2>(halos, nodes);
     double intact_energy = 0, intact_force = 0, worst_energy = 0, peak_got = 0;
     long worst_count = 0;
     for (int st = 0, j = 0; st < steps; ++st) {
       const bool sample = st % sample_every == 0;
       for (auto& s : sims) s->step(sample);
-      exchange_in_process<2>(halos, nodes);
+      parts_.exchange();
       if (!sample) continue;
       Sums got;
       for (auto& s : sims) got = add(got, s->energies(), s->platen_force(0)[1]);
@@ -263,15 +293,7 @@ TEST(Decompose, PartsSteppedWithTheExchangeFollowTheWholeDisc) {
     EXPECT_LT(rel(peak_got, peak_want), 1e-9);
     EXPECT_LT(worst_energy, 1e-8);
     EXPECT_LE(worst_count, 1) << "damaged interfaces";
-    double worst_x = 0;
-    for (size_t p = 0; p < subs.size(); ++p) {
-      auto x = Kokkos::create_mirror_view(sims[p]->m.x);
-      Kokkos::deep_copy(x, sims[p]->m.x);
-      // ghosts too (the owners' after the exchange), but not the inert ones (never read)
-      for (int i = 0; i < subs[p].mesh.num_nodes() - subs[p].inert_ghosts; ++i)
-        for (int k = 0; k < 2; ++k)
-          worst_x = std::max(worst_x, std::fabs(x(i, k) - x_ref(subs[p].node_global[i], k)));
-    }
+    const double worst_x = parts_.worst_position(subs, x_ref);  // ghosts too: the owners' after the exchange
     EXPECT_LT(worst_x, 1e-8 * xscale);
     std::printf(
         "[ decomposed ] %d parts: intact energy %.1e force %.1e; peak %.1e; energies %.1e; "
@@ -348,25 +370,13 @@ TEST(Decompose, SharedNodesAcrossPartsStepLikeTheWholeBox) {
     const std::vector<int> part = partition_elements(whole, parts, PartitionMethod::Rcb);
     const std::vector<SubMesh> subs = decompose(whole, part, parts);
     long shared_ghosts = 0;  // ghosts of the continuous half: nodes of own elements owned elsewhere
-    std::vector<std::unique_ptr<Simulation<3>>> sims;
-    std::vector<Halo<3>> halos;
-    std::vector<const NodeData<3>*> nodes;
-    StepContributions all;
-    for (const SubMesh& s : subs) {
+    for (const SubMesh& s : subs)
       for (int e = 0; e < s.mesh.owned_elems; ++e)
         for (int a = 0; a < 4; ++a) shared_ghosts += s.mesh.elems[4 * e + a] >= s.mesh.owned_nodes;
-      sims.push_back(std::make_unique<Simulation<3>>(c, s.mesh));
-      halos.emplace_back(s.neighbours, s.send, s.recv);
-      all =
-          sims.size() == 1 ? sims[0]->step_contributions() : smallest(all, sims.back()->step_contributions());
-    }
     EXPECT_GT(shared_ghosts, 0) << "the partition should cut the continuous half";
-    for (auto& s : sims) {
-      nodes.push_back(&s->m);
-      s->agree_time_step(all);
-      EXPECT_EQ(s->dt, ref.dt);
-    }
-    exchange_in_process<3>(halos, nodes);
+    Parts<3> parts_(c, subs);
+    auto& sims = parts_.sims;
+    for (auto& s : sims) EXPECT_EQ(s->dt, ref.dt);
     double worst = 0;
     for (int st = 0, j = 0; st < steps; ++st) {
       const bool sample = st % 50 == 49;
@@ -374,7 +384,7 @@ TEST(Decompose, SharedNodesAcrossPartsStepLikeTheWholeBox) {
         s->set_sample_reactions(sample);
         s->step(sample);
       }
-      exchange_in_process<3>(halos, nodes);
+      parts_.exchange();
       if (!sample) continue;
       double strain = 0, kinetic = 0, reaction = 0;
       for (auto& s : sims) {
@@ -387,14 +397,7 @@ TEST(Decompose, SharedNodesAcrossPartsStepLikeTheWholeBox) {
       ++j;
     }
     EXPECT_LT(worst, 1e-10);
-    double worst_x = 0;
-    for (size_t p = 0; p < subs.size(); ++p) {
-      auto x = Kokkos::create_mirror_view(sims[p]->m.x);
-      Kokkos::deep_copy(x, sims[p]->m.x);
-      for (int i = 0; i < subs[p].mesh.num_nodes() - subs[p].inert_ghosts; ++i)
-        for (int k = 0; k < 3; ++k)
-          worst_x = std::max(worst_x, std::fabs(x(i, k) - x_ref(subs[p].node_global[i], k)));
-    }
+    const double worst_x = parts_.worst_position(subs, x_ref);
     EXPECT_LT(worst_x, 1e-10 * xscale);
     std::printf(
         "[ decomposed ] box, %d parts: %ld shared ghosts; energies and reaction %.1e, positions %.1e\n",
