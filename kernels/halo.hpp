@@ -1,9 +1,9 @@
 #pragma once
 // The per-step exchange of a decomposed run (src/parallel/decompose.hpp builds the lists) on the
-// device: after the
-// node update each part packs the positions of its own nodes that other parts hold as ghosts into
-// one buffer, the buffers travel (in one process: exchange_in_process; over MPI: the same buffers
-// handed to MPI), and each part unpacks what it received into its ghost nodes. Positions only: the
+// device: after the node update each part packs the positions of its own nodes that other parts
+// hold as ghosts into one buffer, the buffers travel (in one process: exchange_in_process; over
+// MPI: the same buffers handed to MPI), and each part unpacks what it received into its ghost
+// nodes. Positions only: the
 // force pass reads no velocity (the node update, which does, covers the own nodes only). The
 // ghosts' forces are zeroed at the unpack (they are never used).
 #include <algorithm>
@@ -43,9 +43,8 @@ class Halo {
 
   int send_nodes() const { return send_off.back(); }
   int recv_nodes() const { return recv_off.back(); }
-  // Bytes one exchange sends (and receives).
+  // Bytes one exchange sends.
   long send_bytes() const { return static_cast<long>(send_nodes()) * D * sizeof(double); }
-  long recv_bytes() const { return static_cast<long>(recv_nodes()) * D * sizeof(double); }
   // The doubles of neighbour k in each buffer.
   Kokkos::View<double*> send_part(int k) const {
     return Kokkos::subview(send_buf, std::make_pair(static_cast<size_t>(send_off[k]) * D,
