@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -238,8 +240,15 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
     std::string msg = e.what();
     if (!o.case_path.empty() && msg.find(o.case_path) == std::string::npos)
       msg = o.case_path + ": " + msg;
-    // over several processes every one reads the same input and fails alike: process 0 says it
-    if (!g_comm || g_comm->rank() == 0) std::cerr << "error: " << msg << "\n";
+    // Over several processes every one reads the same input and usually fails alike: process 0
+    // says it and ends them all. The others wait a moment first (their MPI_Abort would kill process
+    // 0 before it has printed); one that fails alone then says it itself.
+    if (g_comm && g_comm->size() > 1 && g_comm->rank() != 0) {
+      std::this_thread::sleep_for(std::chrono::seconds(2));
+      std::cerr << process_prefix() << "error: " << msg << "\n";
+    } else {
+      std::cerr << "error: " << msg << "\n";
+    }
     return stop_all(2);
   } catch (const fdem::NumericalError& e) {
     std::cerr << process_prefix() << "numerical failure: " << e.what() << "\n";
