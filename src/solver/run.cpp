@@ -120,15 +120,35 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 namespace {
 
+// Every process meshes the case itself: the meshes must be the same to the bit (Gmsh's HXT is not
+// reproducible between invocations; the others are). The mesh hash's 64 bits in four 16-bit
+// pieces, their smallest and largest over the processes.
+void check_same_mesh(const Comm& comm, const std::string& hash, const Case& c) {
+  const unsigned long long h = std::stoull(hash, nullptr, 16);
+  double lo[4], hi[4];
+  for (int k = 0; k < 4; ++k) {
+    lo[k] = static_cast<double>((h >> (16 * k)) & 0xffffu);
+    hi[k] = -lo[k];
+  }
+  comm.min(lo, 4);
+  comm.min(hi, 4);
+  for (int k = 0; k < 4; ++k)
+    if (lo[k] != -hi[k])
+      throw InputError(c.file + ": mesh: the processes made different meshes of this case (Gmsh's \"hxt\" "
+                       "mesher differs between invocations); a run over several processes needs a reproducible "
+                       "mesh: \"mesher\": \"delaunay\" or a mesh file");
+}
+
 // A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
 // refused, naming the key; every process meshes and partitions the case alike and runs its part;
-// process 0 alone touches the output folder.
+// process 0 alone touches the output folder (every process reads a restart's checkpoint).
 nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt) {
   const Comm& comm = *opt.comm;
-  const std::string why = " is not available yet in a run over several processes (docs/parallel.md)";
-  if (!opt.restart.empty()) throw InputError("--restart" + why);
-  if (opt.checkpoint_every > 0 || (opt.checkpoint_every < 0 && c.checkpoint_every > 0))
-    throw InputError(c.file + ": output.checkpoint_every (checkpoints)" + why + "; set it to 0");
+  // a checkpoint holds the whole run's state (Simulation::save_state_whole): every process reads
+  // it and takes its part's rows, whatever the process count that wrote it
+  StateArrays restart;
+  CheckpointHeader header;
+  if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   std::unique_ptr<OutputLock> lock;
   if (comm.rank() == 0) {
@@ -138,7 +158,9 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   }
   HostMesh mesh = prepare_mesh(c);
   const RunIdentity id{case_hash(c), mesh_hash(mesh)};
-  if (comm.rank() == 0) remove_old_outputs(out);
+  check_same_mesh(comm, id.mesh_hash, c);
+  if (!opt.restart.empty()) check_restart_matches(opt.restart, header, c, mesh, id);
+  if (comm.rank() == 0 && opt.restart.empty()) remove_old_outputs(out);
   resolve_defaults(c, mesh);
   if (comm.rank() == 0) write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
   // the same partition on every process (deterministic); each keeps its own part
@@ -151,8 +173,9 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   }
   RunOptions o = opt;
   o.progress = opt.progress && comm.rank() == 0;
-  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, nullptr, &part)
-                    : run_dim<3>(c, std::move(mesh), out, o, id, nullptr, &part);
+  const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
+  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, r, &part)
+                    : run_dim<3>(c, std::move(mesh), out, o, id, r, &part);
 }
 
 }  // namespace
@@ -160,9 +183,9 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
 nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   setup_times::reset();
   Case c = load_case(case_path, opt.overrides);
-  if (opt.comm && opt.comm->size() > 1) return run_over_processes(case_path, c, opt);
   if (!std::isfinite(opt.checkpoint_every))  // NaN too
     throw InputError("--checkpoint-every must be a finite time in seconds");
+  if (opt.comm && opt.comm->size() > 1) return run_over_processes(case_path, c, opt);
   StateArrays restart;
   CheckpointHeader header;
   if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);

@@ -35,10 +35,11 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
-  if (restart) sim_.load_state(*restart);
+  if (restart && part) sim_.load_state_whole(*restart);  // the whole run's state: this part's rows
+  else if (restart) sim_.load_state(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, part ? &part->mesh : nullptr);
   if (restart) {
-    restore(*restart);
+    restore(*restart, part != nullptr);
   } else {
     if (writes_) history_->open(out, false);
     if (fragments_on())
@@ -52,10 +53,10 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   announce();
 }
 
-// The run loop's state from the checkpoint; history.csv, fragments.csv and snapshots.h5 cut back
-// to it.
+// The run loop's state from the checkpoint (every process of several: the same); history.csv,
+// fragments.csv and snapshots.h5 (process 0's) cut back to it.
 template <int D>
-void RunLoop<D>::restore(const StateArrays& r) {
+void RunLoop<D>::restore(const StateArrays& r, bool parts) {
   RunState s;
   s.load(r, sim_.m.platens.count);
   history_->restore(s, r.file);
@@ -64,9 +65,11 @@ void RunLoop<D>::restore(const StateArrays& r) {
   prior_loop_wall_ = s.loop_wall_seconds;
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
-  history_->open(out_, true);
-  if (fragments_on()) frag_ = std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
-  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s);
+  if (writes_) history_->open(out_, true);
+  if (fragments_on())
+    frag_ = parts ? std::make_unique<RunFragments<D>>(sim_, c_, *mesh_, out_, writes_, &s, r.file)
+                  : std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
+  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
 }
 
 template <int D>
@@ -157,20 +160,15 @@ nlohmann::json RunLoop<D>::interrupted() {
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
   progress_->done();
   const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
-  if (sim_.comm()) {  // checkpoints of a run over several processes: not yet (docs/parallel.md)
-    snaps_->take(sim_, frag_.get());
-    if (writes_)
-      std::fprintf(stderr, "fdem: interrupted by %s at step %ld, t = %.6e s; no checkpoint (not available yet in a "
-                   "run over several processes)\n", name, sim_.step_count, sim_.t);
-    return finish("interrupted", loop_wall);
-  }
   save_checkpoint();
   snaps_->take(sim_, frag_.get());
   const std::string ck = out_ + "/checkpoint.h5";
-  std::fprintf(stderr,
-               "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
-               "run %s --restart %s (and the same --set options)\n",
-               name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str());
+  if (writes_)
+    std::fprintf(stderr,
+                 "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
+                 "run %s --restart %s (and the same --set options%s)\n",
+                 name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str(),
+                 sim_.comm() ? "; under mpirun with any number of processes, or without" : "");
   return finish("interrupted", loop_wall);
 }
 
@@ -216,7 +214,16 @@ template <int D>
 void RunLoop<D>::save_checkpoint() {
   const auto c0 = Clock::now();
   StateArrays st;
-  sim_.save_state(st);
+  if (sim_.comm()) {  // the whole run's state on process 0, which writes the one file
+    sim_.save_state_whole(st);
+    if (!writes_) {
+      ++ckpt_written_;
+      ckpt_wall_ += seconds(Clock::now() - c0);
+      return;
+    }
+  } else {
+    sim_.save_state(st);
+  }
   RunState s;
   history_->save(s);
   if (frag_) frag_->save(s);
@@ -229,9 +236,9 @@ void RunLoop<D>::save_checkpoint() {
   s.save(st);
   CheckpointHeader h;
   h.dim = D;
-  h.nodes = sim_.m.nn;
-  h.elements = sim_.m.ne;
-  h.interfaces = sim_.m.ni;
+  h.nodes = counts_.at("nodes").get<long long>();  // the whole mesh's (over several processes too)
+  h.elements = counts_.at("elements").get<long long>();
+  h.interfaces = counts_.at("interfaces").get<long long>();
   h.case_hash = id_.case_hash;
   h.mesh_hash = id_.mesh_hash;
   h.time = sim_.t;

@@ -36,7 +36,7 @@ class RunLoop {
 
  private:
   using Clock = std::chrono::steady_clock;
-  void restore(const StateArrays& r);
+  void restore(const StateArrays& r, bool parts);
   void announce() const;
   void step(bool row, bool check);
   void history_row();

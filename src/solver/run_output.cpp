@@ -87,28 +87,35 @@ RunFragments<D>::RunFragments(const Model<D>& m, const std::string& out, const R
                               const std::string& file)
     : analysis_(std::make_unique<FragmentAnalysis<D>>(m)), out_(out) {
   bodies_ = initial_bodies<D>(m, body_);
+  open_csv(restart, file, true);
+}
+
+// out/fragments.csv: a new one, or a restart's: the checkpoint's rows (those a killed run wrote
+// after the checkpoint are dropped), then on.
+template <int D>
+void RunFragments<D>::open_csv(const RunState* restart, const std::string& file, bool writes) {
   const std::vector<std::string> cols = fragment_columns();
-  const std::string path = out + "/fragments.csv";
-  if (!restart) {
-    csv_ = std::make_unique<HistoryWriter>(path, cols);
-    return;
+  if (restart) {
+    rows_ = restart->fragment_rows;
+    if (rows_.size() % cols.size() != 0)
+      throw InputError("checkpoint '" + file + "': run/fragment_rows has " + std::to_string(rows_.size()) +
+                       " values, not whole rows of the " + std::to_string(cols.size()) +
+                       " fragments.csv columns (the file is damaged)");
   }
-  rows_ = restart->fragment_rows;
-  if (rows_.size() % cols.size() != 0)
-    throw InputError("checkpoint '" + file + "': run/fragment_rows has " + std::to_string(rows_.size()) +
-                     " values, not whole rows of the " + std::to_string(cols.size()) +
-                     " fragments.csv columns (the file is damaged)");
-  csv_ = std::make_unique<HistoryWriter>(path, cols, rows_);
+  if (!writes) return;
+  const std::string path = out_ + "/fragments.csv";
+  csv_ = restart ? std::make_unique<HistoryWriter>(path, cols, rows_) : std::make_unique<HistoryWriter>(path, cols);
 }
 
 template <int D>
 RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out,
-                              bool writes)
+                              bool writes, const RunState* restart, const std::string& file)
     : comm_(sim.comm()), out_(out) {
   if (whole.bodies > 1)
     throw InputError(c.file + ": output.fragments (the fragment analysis) of " + std::to_string(whole.bodies) +
                      " bodies is not available yet in a run over several processes (docs/parallel.md); set it "
                      "to false");
+  open_csv(restart, file, writes);
   if (!writes) return;
   // the whole mesh's elements, masses and interfaces (the arrays the labelling reads)
   whole_ = std::make_unique<Model<D>>();
@@ -127,7 +134,6 @@ RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const Hos
   Kokkos::deep_copy(w.iface, fc);
   analysis_ = std::make_unique<FragmentAnalysis<D>>(w);
   bodies_ = initial_bodies<D>(w, body_);
-  csv_ = std::make_unique<HistoryWriter>(out + "/fragments.csv", fragment_columns());
 }
 
 // Every process's counted interfaces' histories (with their whole-mesh indices) into whole_ on

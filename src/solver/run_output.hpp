@@ -61,8 +61,9 @@ class RunFragments {
   // keeps the whole mesh's elements and interfaces and labels its fragments from every process's
   // interface histories, gathered at each call below (which every process makes, at the same
   // steps); the others only send theirs. InputError for several initial bodies (their per-body
-  // statistics need the whole positions: not yet).
-  RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out, bool writes);
+  // statistics need the whole positions: not yet). restart: as above.
+  RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out, bool writes,
+               const RunState* restart = nullptr, const std::string& file = "");
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
   // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null).
@@ -79,6 +80,7 @@ class RunFragments {
   const Comm* comm_ = nullptr;
   FragmentStats none_;
   void gather_histories(const Simulation<D>& sim);
+  void open_csv(const RunState* restart, const std::string& file, bool writes);
   std::string out_;
   std::vector<int> body_;  // initial body of every element (fragment_bodies.hpp)
   int bodies_ = 0;

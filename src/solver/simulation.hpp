@@ -169,6 +169,16 @@ class Simulation {
   // load_state checks the sizes and throws InputError naming the checkpoint file.
   void save_state(StateArrays& s) const;
   void load_state(const StateArrays& s);
+  // Over several processes (set_decomposition first; every process calls them at the same step):
+  // the checkpoint state of the whole run in the whole mesh's order, as one process would write
+  // it, on process 0 (the others' `whole` stays empty): the owners' rows of every per-node and
+  // per-interface entry, the sums of the per-process accumulators (and each process's own values
+  // under "processes/", so that a restart on as many processes goes on to the bit). load_state_whole
+  // takes such a state (or one process's checkpoint) on any number of processes: each picks the
+  // rows of its own and ghost items; the accumulators go back to their processes, or all to
+  // process 0 on another count.
+  void save_state_whole(StateArrays& whole) const;
+  void load_state_whole(const StateArrays& whole);
 
   const std::vector<std::string>& platen_names() const { return platen_names_; }
   const std::vector<std::string>& bc_names() const { return bc_names_; }
@@ -180,6 +190,7 @@ class Simulation {
   // over several processes: the whole mesh's index of each own node, element and interface, and
   // the whole mesh's counts
   std::vector<int> node_global_, elem_global_, iface_global_;
+  std::vector<int> local_node_global_, local_iface_global_;  // every local item's, ghosts too
   long whole_nn_ = 0, whole_ne_ = 0, whole_ni_ = 0;
   void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                     std::vector<double>& stress, std::vector<double>& damage);

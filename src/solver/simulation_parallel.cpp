@@ -1,6 +1,7 @@
 // Simulation's side of a run over several processes (docs/parallel.md): the set-up of a part
 // (time step, energy floor, the first exchange), the exchange of the ghost positions after each
-// node update, and the gathering of the own fields on process 0 for the snapshots.
+// node update, the gathering of the own fields on process 0 for the snapshots, and the whole run's
+// checkpoint state.
 #include <vector>
 
 #include "common/error.hpp"
@@ -18,6 +19,8 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   node_global_.assign(part.node_global.begin(), part.node_global.begin() + m.owned_nodes());
   elem_global_.assign(part.elem_global.begin(), part.elem_global.begin() + m.owned_elems());
   iface_global_.assign(part.iface_global.begin(), part.iface_global.begin() + m.owned_ifaces());
+  local_node_global_ = part.node_global;
+  local_iface_global_ = part.iface_global;
   double counts[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
                       static_cast<double>(m.owned_ifaces())};
   comm_->sum(counts, 3);
@@ -101,9 +104,161 @@ void Simulation<D>::gather_whole(std::vector<double>& x, std::vector<double>& u,
   for (size_t j = 0; root && j < all.size(); j += 2) damage[static_cast<size_t>(all[j])] = all[j + 1];
 }
 
+namespace {
+
+// Checkpoint entries with rows per node or per interface: `blocks` blocks (one per platen for the
+// platens' per-node springs) of one row of `width` values per item.
+struct ItemEntry {
+  const char* name;
+  bool nodes;  // else interfaces
+  int blocks, width;
+};
+
+template <int D>
+std::vector<ItemEntry> item_entries(int platens) {
+  return {{"model/x", true, 1, D},           {"model/v", true, 1, D},
+          {"model/f", true, 1, D},           {"model/platen_area", true, 1, 1},
+          {"model/platen_fs", true, platens, D}, {"model/platen_g0", true, platens, 1},
+          {"model/ihist", false, 1, 4 * D},  {"model/icontact", false, 1, 1}};
+}
+
+// Accumulators of what each process's own items did (their sum is the whole run's).
+const char* const kSummedEntries[] = {"simulation/work_damping", "simulation/work_bc",
+                                      "simulation/work_ramped_loads", "model/platen_acc"};
+
+const std::string kProcessesPrefix = "processes/";
+
+// An entry's values as doubles (the integer entries are flags and counts: exact).
+std::vector<double> entry_values(const StateArrays& s, const std::string& name) {
+  if (s.f64.count(name)) return s.f64.at(name);
+  const std::vector<long long>& v = s.int_array(name);
+  return std::vector<double>(v.begin(), v.end());
+}
+
+void put_entry(StateArrays& s, const std::string& name, const std::vector<double>& v, bool integer) {
+  if (!integer) {
+    s.f64[name] = v;
+    return;
+  }
+  std::vector<long long>& out = s.i64[name];
+  out.assign(v.size(), 0);
+  for (size_t i = 0; i < v.size(); ++i) out[i] = static_cast<long long>(v[i]);
+}
+
+}  // namespace
+
+template <int D>
+void Simulation<D>::save_state_whole(StateArrays& whole) const {
+  StateArrays local;
+  save_state(local);
+  const bool root = comm_->rank() == 0;
+  whole = StateArrays{};
+  if (root) whole = local;  // the entries every process holds alike; the others replaced below
+  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
+    double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
+    comm_->min(&absent, 1);
+    if (absent > 0) continue;
+    const bool integer = local.i64.count(e.name) > 0;
+    const std::vector<double> v = entry_values(local, e.name);
+    const std::vector<int>& own = e.nodes ? node_global_ : iface_global_;
+    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
+    const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
+    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+    if (v.size() != blocks * n * w)
+      throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
+                       " values, not " + std::to_string(blocks * n * w));
+    std::vector<double> mine, all;
+    mine.reserve(own.size() * (1 + blocks * w));
+    for (size_t i = 0; i < own.size(); ++i) {
+      mine.push_back(own[i]);
+      for (size_t b = 0; b < blocks; ++b)
+        for (size_t k = 0; k < w; ++k) mine.push_back(v[(b * n + i) * w + k]);
+    }
+    comm_->gather(mine, all);
+    if (!root) continue;
+    std::vector<double> out(blocks * whole_n * w, 0.0);
+    const size_t row = 1 + blocks * w;
+    for (size_t j = 0; j + row <= all.size(); j += row) {
+      const size_t g = static_cast<size_t>(all[j]);
+      for (size_t b = 0; b < blocks; ++b)
+        for (size_t k = 0; k < w; ++k) out[(b * whole_n + g) * w + k] = all[j + 1 + b * w + k];
+    }
+    whole.f64.erase(e.name);
+    whole.i64.erase(e.name);
+    put_entry(whole, e.name, out, integer);
+  }
+  for (const char* name : kSummedEntries) {
+    if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
+    const std::vector<double>& v = local.f64.at(name);
+    std::vector<double> all;
+    comm_->gather(v, all);
+    if (!root || v.empty()) continue;
+    std::vector<double> total(v.size(), 0.0);
+    for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
+    whole.f64[name] = total;
+    whole.f64[kProcessesPrefix + name] = all;
+  }
+  if (local.i64.count("model/icontact_pending")) {  // set if set on any process
+    double p = -static_cast<double>(local.i64.at("model/icontact_pending").at(0) != 0);
+    comm_->min(&p, 1);
+    if (root) whole.put_int("model/icontact_pending", p < 0 ? 1 : 0);
+  }
+  if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
+}
+
+template <int D>
+void Simulation<D>::load_state_whole(const StateArrays& whole) {
+  // This part's state as it stands (just built): the rows the whole state does not give (the
+  // ghost nodes' velocities, forces and platen springs, which no step reads and the run leaves as
+  // they were built) stay as they are.
+  StateArrays local;
+  save_state(local);
+  StateArrays mine = whole;
+  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
+    if (!local.has(e.name)) continue;
+    const bool integer = local.i64.count(e.name) > 0;
+    std::vector<double> v = entry_values(local, e.name);
+    const std::vector<double> all = entry_values(whole, e.name);
+    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
+    const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
+    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+    if (all.size() != blocks * whole_n * w)
+      throw InputError("checkpoint '" + whole.file + "': " + e.name + " has " + std::to_string(all.size()) +
+                       " values, not " + std::to_string(blocks * whole_n * w) + " (the file is damaged)");
+    // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
+    // interface's (each part computes its interfaces from the same history)
+    const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
+    const std::vector<int>& ids = e.nodes ? local_node_global_ : local_iface_global_;
+    for (size_t b = 0; b < blocks; ++b)
+      for (size_t i = 0; i < rows; ++i)
+        for (size_t k = 0; k < w; ++k)
+          v[(b * n + i) * w + k] = all[(b * whole_n + static_cast<size_t>(ids[i])) * w + k];
+    mine.f64.erase(e.name);
+    mine.i64.erase(e.name);
+    put_entry(mine, e.name, v, integer);
+  }
+  // the accumulators: each process its own where the count is the same, else all on process 0
+  const long long count = whole.i64.count(kProcessesPrefix + "count") ? whole.get_int(kProcessesPrefix + "count") : 1;
+  for (const char* name : kSummedEntries) {
+    if (!whole.f64.count(name)) continue;
+    std::vector<double> v = whole.f64.at(name);
+    const std::string parts = kProcessesPrefix + name;
+    if (count == comm_->size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
+      std::copy(whole.f64.at(parts).begin() + comm_->rank() * v.size(),
+                whole.f64.at(parts).begin() + (comm_->rank() + 1) * v.size(), v.begin());
+    else if (comm_->rank() != 0)
+      std::fill(v.begin(), v.end(), 0.0);
+    mine.f64[name] = v;
+  }
+  load_state(mine);
+  exchange_ghosts();
+}
+
 #define FDEM_SIMULATION_PARALLEL(D)                                                            \
   template void Simulation<D>::set_decomposition(std::shared_ptr<const Comm>, const SubMesh&); \
   template void Simulation<D>::exchange_ghosts();                                              \
+  template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
+  template void Simulation<D>::load_state_whole(const StateArrays&);                           \
   template void Simulation<D>::gather_whole(std::vector<double>&, std::vector<double>&,        \
                                             std::vector<double>&, std::vector<double>&,        \
                                             std::vector<double>&);

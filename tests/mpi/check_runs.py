@@ -14,6 +14,11 @@ each); history.csv must agree:
     impact's, which comes after about 1 400 interfaces have damaged, to 1e-6 (measured 1e-8);
   - after the first damage, to 1e-5 of each column's largest value and the damaged count to 1 %
     (each damage onset amplifies the round-off; measured at most 5e-7 and 0).
+Checkpoints hold the whole run's state (one file, whatever the process count): the disc
+checkpointed on 2 processes and restarted on 2 gives history.csv and fragments.csv byte for byte;
+restarted on 3 and on 1, and a 1-process checkpoint restarted on 4, agree with the run on 1 process
+within the bounds above. SIGTERM to mpirun stops every process at one step with a checkpoint, and
+the restart on 2 processes ends with the uninterrupted run's history.csv byte for byte.
 Then: a case with what such a run does not do yet is refused (exit 2, one message naming the key),
 and a run that blows up on every process ends with exit 3 and no hang.
 """
@@ -74,16 +79,60 @@ def check(ok, what):
         failures.append(what)
 
 
-def run(fdem, n, case, sets, out, timeout=600):
-    cmd = [fdem, "run", os.path.join(ROOT, case), "--out", out, "--quiet"]
+def command(fdem, n, case, sets, out, extra=()):
+    cmd = [fdem, "run", os.path.join(ROOT, case), "--out", out, "--quiet"] + list(extra)
     for s in sets:
         cmd += ["--set", s]
     if n > 1:
         cmd = ["mpirun", "--oversubscribe", "-n", str(n)] + cmd
         if os.geteuid() == 0:
             cmd.insert(1, "--allow-run-as-root")
-    env = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false")
-    return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
+    return cmd
+
+
+ENV = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false")
+
+
+def run(fdem, n, case, sets, out, timeout=600, extra=()):
+    return subprocess.run(command(fdem, n, case, sets, out, extra), env=ENV, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def same_file(a, b):
+    try:
+        with open(a, "rb") as fa, open(b, "rb") as fb:
+            return fa.read() == fb.read()
+    except OSError:
+        return False
+
+
+def check_restarts(fdem):
+    """The disc's checkpoints over processes (the runs disc-1 and disc-2 are there already)."""
+    case, sets, cols_main, peak_tol, intact_tol = CASES["disc"]
+    ck = ["output.checkpoint_every=7e-5"]  # one checkpoint, near step 600 of 1100 (after the first damage)
+    base = history(os.path.join(WORK, "disc-1", "history.csv"))
+    for n in (2, 1):
+        out = os.path.join(WORK, f"disc-ck{n}")
+        r = run(fdem, n, case, sets + ck, out)
+        check(r.returncode == 0 and os.path.exists(os.path.join(out, "checkpoint.h5")),
+              f"disc on {n} process(es) with a checkpoint: exit {r.returncode}")
+        check(same_file(os.path.join(out, "history.csv"), os.path.join(WORK, f"disc-{n}", "history.csv")),
+              f"disc on {n} process(es): writing the checkpoint changes no bit of history.csv")
+    for src, n in ((2, 2), (2, 3), (2, 1), (1, 4)):
+        out = os.path.join(WORK, f"disc-restart{src}-{n}")
+        r = run(fdem, n, case, sets, out, extra=["--restart", os.path.join(WORK, f"disc-ck{src}", "checkpoint.h5")])
+        check(r.returncode == 0, f"disc, checkpoint of {src} process(es) restarted on {n}: exit {r.returncode}")
+        if r.returncode != 0:
+            print(r.stderr[-3000:])
+            continue
+        if src == n:
+            for f in ("history.csv", "fragments.csv"):
+                check(same_file(os.path.join(out, f), os.path.join(WORK, f"disc-{n}", f)),
+                      f"disc, checkpoint of {src} processes restarted on {n}: {f} the same byte for byte as the "
+                      f"run that did not stop")
+        else:
+            compare(f"disc restarted ({src} -> {n})", cols_main, peak_tol, intact_tol, base,
+                    history(os.path.join(out, "history.csv")), n)
 
 
 def history(path):
@@ -201,6 +250,9 @@ def main():
             if frames.get(1) is not None:
                 compare_frames(name, frames[1], frames.get(n), n)
 
+    print("checkpoints and restarts")
+    check_restarts(fdem)
+
     print("impact3d at 40 m/s: fragments")
     base = None
     for n in (1, 2, 3, 4):
@@ -249,26 +301,34 @@ def main():
     check(r.returncode == 3 and "numerical failure" in r.stderr,
           f"an unstable run ends every process: exit {r.returncode}")
     # SIGTERM to mpirun (which passes it on to the processes): they stop together at the same step,
-    # process 0 writes summary.json (stop reason "interrupted"), nothing hangs
+    # process 0 writes the checkpoint and summary.json (stop reason "interrupted"), nothing hangs;
+    # the restart on as many processes ends where the run that was not stopped ends, to the bit
+    sig_case = CASES["impact3d"][0]
+    sig_sets = COMMON + ["parameters.h=0.006", "time.max_steps=3000", "output.history_rows=3000",
+                         "output.snapshot_count=0"]
+    ref = os.path.join(WORK, "uninterrupted")
+    r = run(fdem, 2, sig_case, sig_sets, ref)
+    check(r.returncode == 0, f"3D impact, 3000 steps, 2 processes: exit {r.returncode}")
     out = os.path.join(WORK, "interrupted")
-    cmd = ["mpirun", "--oversubscribe", "-n", "2", fdem, "run", os.path.join(ROOT, CASES["impact3d"][0]), "--out", out,
-           "--quiet", "--set", 'contact={"enabled": false}', "--set", "parameters.h=0.004",
-           "--set", "output.snapshot_count=0"]
-    if os.geteuid() == 0:
-        cmd.insert(1, "--allow-run-as-root")
-    p = subprocess.Popen(cmd, env=dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false"),
-                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(command(fdem, 2, sig_case, sig_sets, out), env=ENV, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
     import time
     t0 = time.time()
     hist = os.path.join(out, "history.csv")
     while time.time() - t0 < 60 and not (os.path.exists(hist) and sum(1 for _ in open(hist)) > 3):
-        time.sleep(0.2)
+        time.sleep(0.05)
     p.send_signal(15)
     try:
         _, err = p.communicate(timeout=60)
         s = json.load(open(os.path.join(out, "summary.json")))
-        check(s.get("stop_reason") == "interrupted" and "interrupted by SIGTERM" in err,
-              f"SIGTERM to mpirun: stopped at step {s.get('steps')}, summary.json stop reason {s.get('stop_reason')}")
+        check(s.get("stop_reason") == "interrupted" and "interrupted by SIGTERM" in err and
+              "checkpoint" in err and s.get("steps", 3000) < 3000,
+              f"SIGTERM to mpirun: stopped at step {s.get('steps')}, summary.json stop reason {s.get('stop_reason')}, "
+              "checkpoint written")
+        r = run(fdem, 2, sig_case, sig_sets, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
+        check(r.returncode == 0 and same_file(os.path.join(out, "history.csv"), os.path.join(ref, "history.csv")),
+              f"the restart after SIGTERM on 2 processes: exit {r.returncode}, history.csv the same byte for byte as "
+              "the run that did not stop")
     except subprocess.TimeoutExpired:
         p.kill()
         check(False, "SIGTERM to mpirun: the processes did not end within 60 s")
