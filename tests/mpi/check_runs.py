@@ -11,9 +11,11 @@ each); history.csv must agree:
     ten digits), 1e-6 for the SEN beam with a point load (its platens amplify round-off as much
     between thread counts);
   - the peak load of the Brazilian disc to 1e-9 relative (the issue's bound; measured 0); the 3D
-    impact's, which comes after about 1 400 interfaces have damaged, to 1e-6 (measured 1e-8);
+    and 2D impacts', which come after about 1 400 and 780 interfaces have damaged, to 1e-6
+    (measured 1e-8 and 0);
   - after the first damage, to 1e-5 of each column's largest value and the damaged count to 1 %
-    (each damage onset amplifies the round-off; measured at most 5e-7 and 0).
+    (each damage onset amplifies the round-off; measured at most 5e-7 and 0); the 2D impact's
+    failed interfaces make it grow faster: 1e-4 there (measured 3.4e-5; see CASES).
 Checkpoints hold the whole run's state (one file, whatever the process count): the disc
 checkpointed on 2 processes and restarted on 2 gives history.csv and fragments.csv byte for byte;
 restarted on 3 and on 1, and a 1-process checkpoint restarted on 4, agree with the run on 1 process
@@ -46,6 +48,15 @@ CASES = {
                  COMMON + ["parameters.h=0.006", "time.max_steps=1500", "output.history_rows=3000",
                            "output.snapshot_count=0", 'output.monitors=["all", "surface"]'],
                  ["plate_load [N]", "all_uz [m]", "surface_uz [m]"], 1e-6, 1e-9),
+    # the 2D impact, coarse and fast: the disc hits the plate and cracks (about 1 100 damaged
+    # interfaces, the first at row 32); the peak plate load comes after the first damage. Equal to
+    # history.csv's ten digits until about 80 interfaces have failed (row 400 of 468), then the
+    # round-off grows as in a chaotic run: at the end one process on 1 and on 2 threads differs by
+    # 1.2e-6 of the plate load, 4 processes by 3.4e-5 (both from row 400 on), so 1e-4 there
+    "impact2d": ("cases/particle_impact_2d/case.json",
+                 COMMON + ["parameters.h=0.005", "parameters.speed=20", "time.max_steps=2000",
+                           "output.history_rows=2000", "output.snapshot_count=0"],
+                 ["plate_load [N]"], 1e-6, 1e-9),
     # the SEN beam (platens, a pin, monitors) with a ramped point load added on its load point: the
     # load is shared by the whole set's nodes, whichever process owns them. Intact throughout, but
     # its platens touch a few nodes each, which amplifies round-off: one process on 1 and on 2
@@ -65,6 +76,8 @@ CASES = {
 # fracture: the fragment counts (2 % or 2 fragments in every row of fragments.csv), the largest
 # fragment's mass fraction (1e-3), the kinetic energy and the fracture dissipation (5e-3 of their
 # largest values; measured up to 1.6e-3), the damaged and failed interfaces (1 % and 2 %).
+# the bound over the whole run (after the first damage), where a case needs another than 1e-5
+AFTER_TOL = {"impact2d": 1e-4}
 FRAGMENTING = ("cases/particle_impact_3d/case.json",
                COMMON + ["parameters.h=0.006", "parameters.speed=40", "time.max_steps=4000",
                          "output.history_rows=300", "output.snapshot_count=3"])
@@ -189,7 +202,8 @@ def compare(name, cols_main, peak_tol, intact_tol, base, other, n):
     check(first > 1, f"{name}: {first} rows before the first damage")
     check(intact < intact_tol,
           f"{name}, {n} processes: intact, worst difference {intact:.1e} of the column's largest value (< {intact_tol:g})")
-    check(after < 1e-5, f"{name}, {n} processes: whole run, worst difference {after:.1e} (< 1e-5)")
+    tol = AFTER_TOL.get(name, 1e-5)
+    check(after < tol, f"{name}, {n} processes: whole run, worst difference {after:.1e} (< {tol:g})")
     da, db = a[-1][dmg], b[-1][dmg]
     check(abs(da - db) <= max(1.0, 0.01 * da), f"{name}, {n} processes: damaged interfaces {db:.0f} against {da:.0f}")
     for h in cols_main:
