@@ -123,6 +123,12 @@ struct PairSubset {
 // Scratch per pair: g gap, phi fade (< 0: a free element's face), n normal, w weight, depth the
 // depth at the last step, rel the energy released (written for the pairs of the node's
 // PairSubset only, for all its candidates when the subset overflows).
+#if defined(__GNUC__) && !defined(__CUDA_ARCH__) && !defined(__HIP_DEVICE_COMPILE__)
+#define FDEM_NARROW_GAPS_FIRST 1
+#else
+#define FDEM_NARROW_GAPS_FIRST 0
+#endif
+
 template <int D, bool Fric, int Cap = kSubsetCap>
 struct ContactForcesFn {
   using Subset = PairSubset<Cap>;
@@ -170,25 +176,36 @@ struct ContactForcesFn {
   //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
   //    The pairs the later passes visit go to sub; All: every pair gets its scratch (the others
   //    weight 0, no fade, no depth), for a node whose subset overflows.
-  static constexpr int kAhead = 4;
   template <bool All>
   KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D], Subset& sub) const {
     int last_e = -1, last_a = -1;
     double last_d = 0.0;
+#if FDEM_NARROW_GAPS_FIRST
+    // host CPUs: the gaps of all candidates first, in a loop without a branch, so that the core
+    // reads their face rows (one random row each) side by side; in the loop below a branch on
+    // each gap would wait for its row, and a mispredicted one (the outcome is about even) throws
+    // away the reads begun after it. GPUs hide the latency with other threads instead.
     for (int j = b; j < e; ++j) {
-#if defined(__GNUC__) && !defined(__CUDA_ARCH__) && !defined(__HIP_DEVICE_COMPILE__)
-      // host CPUs: ask for the face row of a candidate a few ahead (a random row each: the pass
-      // waits on them); GPUs hide the latency with other threads instead
-      if (j + kAhead < e) __builtin_prefetch(&S.fgeo(S.fslot(P.face(j + kAhead)), 0));
+      double n[D], wv[D];
+      scr.g(j) = face_gap_geo<D>(S.fgeo, S.fslot(P.face(j)), xs, n, wv);
+    }
 #endif
+    for (int j = b; j < e; ++j) {
       const double fn = P.fn(j);
       const bool hist = fn > 0.0 || P.g0(j) < 0.0;
       const int fc = P.face(j);
       double n[D], N[D], wv[D];  // normal, barycentric coordinates, offset from the face
+#if FDEM_NARROW_GAPS_FIRST
+      const double g = scr.g(j);
+      const bool far = !hist && !(g < L.dpen);
+      if (!far) face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);  // n and wv (the same g)
+#else
       const double g = face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);
+      const bool far = !hist && !(g < L.dpen);
+#endif
       // in front of the face by dpen or more: not near, and outside the face's element (no
       // weight when that is a free element either); most candidates end here
-      if (!hist && !(g < L.dpen)) {
+      if (far) {
         if (All) none(j, g);
         continue;
       }
