@@ -160,6 +160,60 @@ TEST(Decompose, RefusesBadPartIdsAndContactNamingTheKey) {
   }
 }
 
+// A part sent to its process (pack_submesh, unpack_submesh) arrives whole: every field the same;
+// data cut short or with bytes left over is refused.
+TEST(Decompose, PartsPackedAndUnpackedAreTheSameAndDamageIsRefused) {
+  const HostMesh box = half_fracturable_box();
+  const auto subs = decompose(box, partition_elements(box, 3, PartitionMethod::Rcb), 3);
+  for (const SubMesh& s : subs) {
+    const std::vector<char> bytes = pack_submesh(s);
+    const SubMesh u = unpack_submesh(bytes);
+    EXPECT_EQ(u.part, s.part);
+    EXPECT_EQ(u.parts, 3);
+    EXPECT_EQ(u.whole_nodes, box.num_nodes());
+    EXPECT_EQ(u.whole_elems, box.num_elems());
+    EXPECT_EQ(u.whole_ifaces, box.num_ifaces());
+    const HostMesh &a = s.mesh, &b = u.mesh;
+    EXPECT_EQ(b.dim, a.dim);
+    EXPECT_EQ(b.X, a.X);
+    EXPECT_EQ(b.elems, a.elems);
+    EXPECT_EQ(b.elem_region, a.elem_region);
+    EXPECT_EQ(b.region_names, a.region_names);
+    EXPECT_EQ(b.node_sets, a.node_sets);
+    EXPECT_EQ(b.face_sets, a.face_sets);
+    EXPECT_EQ(b.iface_sets, a.iface_sets);
+    EXPECT_EQ(b.ifaces, a.ifaces);
+    EXPECT_EQ(b.iface_elems, a.iface_elems);
+    EXPECT_EQ(b.node_origin, a.node_origin);
+    EXPECT_EQ(b.warnings, a.warnings);
+    EXPECT_EQ(b.bodies, a.bodies);
+    EXPECT_EQ(b.owned_nodes, a.owned_nodes);
+    EXPECT_EQ(b.owned_elems, a.owned_elems);
+    EXPECT_EQ(b.owned_ifaces, a.owned_ifaces);
+    EXPECT_EQ(b.bulk_elems, a.bulk_elems);
+    EXPECT_EQ(b.whole_set_size, a.whole_set_size);
+    EXPECT_EQ(u.node_global, s.node_global);
+    EXPECT_EQ(u.elem_global, s.elem_global);
+    EXPECT_EQ(u.iface_global, s.iface_global);
+    EXPECT_EQ(u.neighbours, s.neighbours);
+    EXPECT_EQ(u.send, s.send);
+    EXPECT_EQ(u.recv, s.recv);
+    EXPECT_EQ(u.inert_ghosts, s.inert_ghosts);
+    EXPECT_FALSE(a.node_sets.empty());
+    EXPECT_GT(u.ghost_nodes(), 0);
+    EXPECT_EQ(pack_submesh(u), bytes);
+    std::vector<char> cut(bytes.begin(), bytes.end() - 3), more = bytes;
+    more.push_back(0);
+    EXPECT_THROW(unpack_submesh(cut), InputError);
+    EXPECT_THROW(unpack_submesh(more), InputError);
+    std::vector<char> huge = bytes;  // the first count (X's size, after 5 scalars and dim) made huge
+    const size_t at = 2 * sizeof(int) + 3 * sizeof(long) + sizeof(int);
+    const long long big = 1LL << 60;
+    std::memcpy(huge.data() + at, &big, sizeof big);
+    EXPECT_THROW(unpack_submesh(huge), InputError);
+  }
+}
+
 struct Sums {
   double kinetic = 0, strain = 0, interface_elastic = 0, platen_elastic = 0, fracture = 0, damping = 0,
          external = 0, balance = 0, force = 0;

@@ -95,7 +95,7 @@ struct ContactSpec {
   double kn = 0, ks = 0;   // Pa/m per unit contact area; 0: derive (resolve_defaults)
   double friction = -1;    // Coulomb coefficient; < 0: derive (default_contact_friction)
   double cohesion = 0;     // Pa
-  double skin = 0;         // m, Verlet skin of the broad phase; 0: derive (0.1 mean element size)
+  double skin = 0;         // m, Verlet skin of the broad phase; 0: derive (0.02 mean element size)
 };
 
 struct Case {
@@ -176,6 +176,9 @@ void check_case_against_mesh(const Case& c, const HostMesh& mesh);
 // changes nothing. Platen kn and ks; contact kn, ks, friction and skin (docs/case-format.md,
 // "platens" and "contact"). Defined in src/io/case_defaults.cpp.
 void resolve_defaults(Case& c, const HostMesh& mesh);
+// The same from the mesh's mean element size (mesh_quality(mesh).mean_size) alone: what the
+// processes of a run over several that do not hold the whole mesh use (the same values).
+void resolve_defaults(Case& c, double mean_element_size);
 
 // Contact friction when not given: tan(phi) of the fracture interface material, else 0.
 double default_contact_friction(const Case& c);

@@ -15,7 +15,8 @@ struct DerivedStiffness {
   double kn = 0, ks_ratio = 0;
 };
 
-DerivedStiffness derived_stiffness(const Case& c, const HostMesh& mesh) {
+template <class MeanSize>
+DerivedStiffness derived_stiffness(const Case& c, const MeanSize& mean_size) {
   DerivedStiffness s;
   if (c.fracture_material >= 0) {
     const auto& im = c.interface_materials[c.fracture_material];
@@ -29,7 +30,7 @@ DerivedStiffness derived_stiffness(const Case& c, const HostMesh& mesh) {
       emax = bm.E;
       nu = bm.nu;
     }
-  s.kn = 10 * emax / mesh_quality(mesh).mean_size;
+  s.kn = 10 * emax / mean_size();
   s.ks_ratio = 1.0 / (2 * (1 + nu));
   return s;
 }
@@ -52,11 +53,15 @@ double default_contact_friction(const Case& c) {
   return c.fracture_material >= 0 ? std::tan(c.interface_materials[c.fracture_material].phi) : 0.0;
 }
 
-void resolve_defaults(Case& c, const HostMesh& mesh) {
+namespace {
+
+// mean_size(): the mean element size (asked for only when a value derives from it)
+template <class MeanSize>
+void resolve_with(Case& c, const MeanSize& mean_size) {
   bool need = unset(c.contact.kn) || unset(c.contact.ks);
   for (const auto& p : c.platens) need = need || unset(p.kn) || unset(p.ks);
   DerivedStiffness d;
-  if (need) d = derived_stiffness(c, mesh);
+  if (need) d = derived_stiffness(c, mean_size);
 
   nlohmann::json* pl = resolved_section(c, "platens");
   const bool pl_known = pl && pl->is_array() && pl->size() == c.platens.size();
@@ -75,7 +80,17 @@ void resolve_defaults(Case& c, const HostMesh& mesh) {
   // skin: 2 % of the mean element size (docs/performance-impact.md, "Skin"): the narrow phase costs
   // in proportion to the candidates, which grow with the search distance dpen + skin, and a
   // rebuild costs about ten narrow-phase passes; the results do not depend on it
-  if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.02 * mesh_quality(mesh).mean_size);
+  if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.02 * mean_size());
+}
+
+}  // namespace
+
+void resolve_defaults(Case& c, const HostMesh& mesh) {
+  resolve_with(c, [&] { return mesh_quality(mesh).mean_size; });
+}
+
+void resolve_defaults(Case& c, double mean_element_size) {
+  resolve_with(c, [=] { return mean_element_size; });
 }
 
 }  // namespace fdem

@@ -30,6 +30,9 @@ class Comm {
   // Every process's `mine`, one after the other in process order, into `all` on process 0 (the
   // others' `all` is left as it is).
   virtual void gather(const std::vector<double>& mine, std::vector<double>& all) const = 0;
+  // From process 0 (parts: one buffer per process, consumed) to each process its own, into
+  // `mine` (process 0's own too).
+  virtual void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const = 0;
   // Whether the MPI passes device buffers without host copies (CUDA-aware); "" when unknown.
   virtual std::string gpu_aware() const = 0;
   // Ends every process of the run now (after an error on one of them: the others would wait for it).

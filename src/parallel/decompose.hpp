@@ -40,6 +40,7 @@ namespace fdem {
 
 struct SubMesh {
   int part = 0, parts = 1;
+  long whole_nodes = 0, whole_elems = 0, whole_ifaces = 0;  // the whole mesh's counts
   // The local mesh: node sets hold the own nodes only (velocity BCs, reactions, monitors: each
   // node is counted once over the parts); iface_sets the counted interfaces only; owned_* set.
   HostMesh mesh;
@@ -60,5 +61,10 @@ struct SubMesh {
 // Every part's share of `whole` (after insert_interfaces), for part ids `elem_part` in
 // [0, parts). InputError when elem_part does not have one valid id per element. Deterministic.
 std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts);
+
+// A part as bytes (for sending it to its process) and back; unpack_submesh throws InputError on
+// data that does not unpack exactly (damaged or cut short).
+std::vector<char> pack_submesh(const SubMesh& s);
+SubMesh unpack_submesh(const std::vector<char>& bytes);
 
 }  // namespace fdem

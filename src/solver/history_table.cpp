@@ -23,14 +23,15 @@ HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulat
   for (int p = 0; p < np; ++p)
     if (sim.platen_names()[p] == c.stop_platen) stop_platen_ = p;
   add_columns(sim, mesh, part);
-  set_load_window(c, mesh);
+  set_load_window(c, part ? *part : mesh, part ? sim.comm() : nullptr);
 }
 
 // The load window: the P-wave transit time across the body along the stop platen's normal (the
 // largest extent along any platen's normal without a stop rule), in the slowest material of the
-// case, at most end_time / 10; 32 load samples per window.
+// case, at most end_time / 10; 32 load samples per window. comm: the extent over every process's
+// nodes (their union is the whole mesh's: the same window on each).
 template <int D>
-void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh) {
+void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh, const Comm* comm) {
   double c_min = std::numeric_limits<double>::infinity();
   for (const auto& rm : c.region_material) {
     if (rm.second < 0 || rm.second >= static_cast<int>(c.materials.size())) continue;
@@ -50,6 +51,12 @@ void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh) {
       lo = std::min(lo, s);
       hi = std::max(hi, s);
     }
+    if (comm) {
+      double v[2] = {lo, -hi};
+      comm->min(v, 2);
+      lo = v[0];
+      hi = -v[1];
+    }
     if (hi > lo) extent = std::max(extent, hi - lo);
   }
   window_ = c.end_time / 10;
@@ -68,7 +75,7 @@ void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh
   for (const auto& name : sim.bc_names())
     for (int k = 0; k < D; ++k) cols_.push_back(name + "_reaction_" + kAxes[k] + " [N]");
   for (const auto& name : c_.monitors) {
-    monitor_count_.push_back(static_cast<long>(mesh.node_sets.at(name).size()));
+    monitor_count_.push_back(part ? part->whole_set_size.at(name) : static_cast<long>(mesh.node_sets.at(name).size()));
     const auto& nodes = (part ? *part : mesh).node_sets.at(name);
     Kokkos::View<int*> v("fdem::monitor", nodes.size());
     auto vh = Kokkos::create_mirror_view(v);

@@ -27,8 +27,10 @@ namespace fdem {
 template <int D>
 class HistoryTable {
  public:
-  // part: a run over several processes (sim built from part's mesh; mesh is the whole one): the
-  // monitors' node lists are the part's own nodes, their mean taken over all processes.
+  // part: a run over several processes (sim built from part's mesh): the monitors' node lists are
+  // the part's own nodes, their mean taken over all processes (the sets' whole sizes from
+  // part->whole_set_size), and the load window is taken over every process's nodes; `mesh` is
+  // then not read (the whole mesh is on process 0 only).
   HistoryTable(const Case& c, const HostMesh& mesh, const Simulation<D>& sim, const HostMesh* part = nullptr);
 
   const std::vector<std::string>& columns() const { return cols_; }
@@ -75,7 +77,7 @@ class HistoryTable {
   void add_columns(const Simulation<D>& sim, const HostMesh& mesh, const HostMesh* part);
   std::vector<double> make_row(const Simulation<D>& sim);
   std::string joined_columns() const;
-  void set_load_window(const Case& c, const HostMesh& mesh);
+  void set_load_window(const Case& c, const HostMesh& mesh, const Comm* comm);
 
   const Case& c_;
   std::vector<std::string> cols_;

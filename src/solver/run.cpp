@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
@@ -120,30 +121,13 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 namespace {
 
-// Every process meshes the case itself: the meshes must be the same to the bit (Gmsh's HXT is not
-// reproducible between invocations; the others are). The mesh hash's 64 bits in four 16-bit
-// pieces, their smallest and largest over the processes.
-void check_same_mesh(const Comm& comm, const std::string& hash, const Case& c) {
-  const unsigned long long h = std::stoull(hash, nullptr, 16);
-  double lo[4], hi[4];
-  for (int k = 0; k < 4; ++k) {
-    lo[k] = static_cast<double>((h >> (16 * k)) & 0xffffu);
-    hi[k] = -lo[k];
-  }
-  comm.min(lo, 4);
-  comm.min(hi, 4);
-  for (int k = 0; k < 4; ++k)
-    if (lo[k] != -hi[k])
-      throw InputError(c.file + ": mesh: the processes made different meshes of this case (Gmsh's \"hxt\" "
-                       "mesher differs between invocations); a run over several processes needs a reproducible "
-                       "mesh: \"mesher\": \"delaunay\" or a mesh file");
-}
-
 // A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
-// refused, naming the key; every process meshes and partitions the case alike and runs its part;
-// process 0 alone touches the output folder (every process reads a restart's checkpoint).
+// refused, naming the key. Process 0 meshes the case, partitions and decomposes it and sends each
+// process its part (the others never hold the whole mesh); every process runs its part; process 0
+// alone touches the output folder (every process reads a restart's checkpoint).
 nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt) {
   const Comm& comm = *opt.comm;
+  const bool root = comm.rank() == 0;
   // a checkpoint holds the whole run's state (Simulation::save_state_whole): every process reads
   // it and takes its part's rows, whatever the process count that wrote it
   StateArrays restart;
@@ -151,28 +135,47 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   std::unique_ptr<OutputLock> lock;
-  if (comm.rank() == 0) {
+  HostMesh mesh;  // the whole mesh on process 0; elsewhere only its dimension and body count
+  RunIdentity id{case_hash(c), ""};
+  double mean_size = std::numeric_limits<double>::infinity();
+  std::vector<std::vector<char>> parts;
+  if (root) {
     ensure_output_dir(out);
     lock = std::make_unique<OutputLock>(out);
     refuse_inputs_among_outputs(out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
+    mesh = prepare_mesh(c);
+    id.mesh_hash = mesh_hash(mesh);
+    if (!opt.restart.empty()) check_restart_matches(opt.restart, header, c, mesh, id);
+    if (opt.restart.empty()) remove_old_outputs(out);
+    mean_size = mesh_quality(mesh).mean_size;
+    setup_times::Phase phase("decomposition");
+    // METIS when the build has it, else coordinate bisection (docs/parallel.md)
+    const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
+    std::vector<SubMesh> all = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size());
+    for (SubMesh& s : all) {
+      parts.push_back(pack_submesh(s));
+      s = SubMesh{};  // packed: freed
+    }
   }
-  HostMesh mesh = prepare_mesh(c);
-  const RunIdentity id{case_hash(c), mesh_hash(mesh)};
-  check_same_mesh(comm, id.mesh_hash, c);
-  if (!opt.restart.empty()) check_restart_matches(opt.restart, header, c, mesh, id);
-  if (comm.rank() == 0 && opt.restart.empty()) remove_old_outputs(out);
-  resolve_defaults(c, mesh);
-  if (comm.rank() == 0) write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
-  // the same partition on every process (deterministic); each keeps its own part
-  const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
+  // (an error on process 0 above ends every process: the others wait here)
   SubMesh part;
   {
-    setup_times::Phase phase("decomposition");
-    std::vector<SubMesh> parts = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size());
-    part = std::move(parts[comm.rank()]);
+    setup_times::Phase phase("parts_sent");
+    std::vector<char> mine;
+    comm.scatter_bytes(parts, mine);
+    part = unpack_submesh(mine);
+  }
+  comm.min(&mean_size, 1);  // process 0's
+  if (root) {
+    resolve_defaults(c, mesh);
+    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+  } else {
+    resolve_defaults(c, mean_size);  // the same values from the same mean size
+    mesh.dim = c.dim;
+    mesh.bodies = part.mesh.bodies;
   }
   RunOptions o = opt;
-  o.progress = opt.progress && comm.rank() == 0;
+  o.progress = opt.progress && root;
   const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
   return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, r, &part)
                     : run_dim<3>(c, std::move(mesh), out, o, id, r, &part);

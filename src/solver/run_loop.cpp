@@ -28,9 +28,11 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
       sim_(c, part ? part->mesh : *mesh_),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
+  whole_ifaces_ = mesh_->num_ifaces();
   if (part) {
     sim_.set_decomposition(opt.comm, *part);
     writes_ = opt.comm->rank() == 0;
+    whole_ifaces_ = part->whole_ifaces;
   }
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
@@ -47,7 +49,10 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
                    : std::make_unique<RunFragments<D>>(sim_.m, out);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
-  counts_ = mesh_report(*mesh_);
+  if (part && !writes_)  // this process holds no whole mesh: its counts, for the summary it does not write
+    counts_ = {{"nodes", part->whole_nodes}, {"elements", part->whole_elems}, {"interfaces", part->whole_ifaces}};
+  else
+    counts_ = mesh_report(*mesh_);
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
@@ -269,11 +274,14 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     double most[2] = {-bytes[0], -bytes[1]};
     comm->sum(bytes, 2);
     comm->min(most, 2);
+    std::vector<double> peaks;  // every process's peak resident memory, on process 0
+    comm->gather({setup_times::peak_rss_bytes()}, peaks);
     summary["processes"] = {{"count", comm->size()},
                             {"exchange_bytes_per_step", bytes[0]},
                             {"exchange_bytes_per_step_most", -most[0]},
                             {"exchange_seconds_most", -most[1]},
-                            {"gpu_aware_mpi", comm->gpu_aware()}};
+                            {"gpu_aware_mpi", comm->gpu_aware()},
+                            {"peak_rss_bytes", peaks}};
   }
   if (writes_) write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   if (writes_) print_run_end(summary, r, sim_.step_count, opt_.progress);

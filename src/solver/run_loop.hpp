@@ -27,7 +27,8 @@ class RunLoop {
   // restart: the checkpoint to go on from (checked against the case by the caller), or null. The
   // mesh is freed once the model and the outputs are set up (the run does not need it).
   // part: this process's part of a run over several processes (opt.comm), the model built from
-  // it; mesh is then the whole mesh (load window, counts). Null: one process.
+  // it; mesh is then the whole mesh on process 0 (outputs, counts) and an empty one with the
+  // dimension and body count on the others. Null: one process.
   RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
           const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr);
   // Runs to the end time (or the step limit, or the stop rule); returns the summary written to
@@ -46,9 +47,8 @@ class RunLoop {
   // The signal that asks the run to stop (0: none); over several processes the same on each.
   int interrupt_signal() const;
   static constexpr long kInterruptPoll = 64;
-  // (the whole mesh's interfaces while it is there: a part of a run over several processes may
-  // have none)
-  bool fragments_on() const { return c_.output_fragments && (mesh_ ? mesh_->num_ifaces() : sim_.m.ni) > 0; }
+  // (the whole mesh's interfaces: a part of a run over several processes may have none)
+  bool fragments_on() const { return c_.output_fragments && whole_ifaces_ > 0; }
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
@@ -72,6 +72,7 @@ class RunLoop {
   long ckpt_written_ = 0;
   int signal_ = 0;  // the signal that stopped the run (0: none)
   bool writes_ = true;  // this process writes the outputs (process 0 of a run over several)
+  long whole_ifaces_ = 0;  // the whole mesh's interfaces
 };
 
 // run_case's run of a prepared case in dimension D.

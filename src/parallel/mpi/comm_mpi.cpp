@@ -5,7 +5,10 @@
 #include <mpi-ext.h>  // Open MPI's MPIX_Query_cuda_support
 #endif
 
+#include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <vector>
 
 namespace fdem {
@@ -80,6 +83,35 @@ class MpiComm final : public Comm {
     }
     MPI_Gatherv(mine.data(), n, MPI_DOUBLE, rank_ == 0 ? all.data() : nullptr, counts.data(), displs.data(),
                 MPI_DOUBLE, 0, MPI_COMM_WORLD);
+  }
+  // Process 0 sends parts[r] to process r, in pieces of at most 1 GiB (MPI counts are ints).
+  void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const override {
+    constexpr long long kPiece = 1LL << 30;
+    if (rank_ == 0) {
+      for (int r = 1; r < size_; ++r) {
+        const std::vector<char>& b = parts[static_cast<size_t>(r)];
+        long long n = static_cast<long long>(b.size());
+        MPI_Send(&n, 1, MPI_LONG_LONG, r, kTag + 1, MPI_COMM_WORLD);
+        for (long long at = 0; at < n; at += kPiece)
+          MPI_Send(b.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, r, kTag + 1, MPI_COMM_WORLD);
+        std::vector<char>().swap(parts[static_cast<size_t>(r)]);  // sent: freed
+      }
+      mine = std::move(parts[0]);
+      return;
+    }
+    // process 0 may mesh for minutes first: wait without spinning on a core (MPI's own wait
+    // polls, which takes the core from process 0 where processes share cores)
+    for (int flag = 0;;) {
+      MPI_Iprobe(0, kTag + 1, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+      if (flag) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    long long n = 0;
+    MPI_Recv(&n, 1, MPI_LONG_LONG, 0, kTag + 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    mine.resize(static_cast<size_t>(n));
+    for (long long at = 0; at < n; at += kPiece)
+      MPI_Recv(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, 0, kTag + 1, MPI_COMM_WORLD,
+               MPI_STATUS_IGNORE);
   }
   std::string gpu_aware() const override {
     if (Kokkos::SpaceAccessibility<Kokkos::HostSpace, Kokkos::View<double*>::memory_space>::accessible)
