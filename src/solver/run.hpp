@@ -24,9 +24,10 @@ struct RunOptions {
   // reason "interrupted", "signal" the number). Null: not watched.
   const volatile std::sig_atomic_t* interrupt = nullptr;
   // The processes of a run under mpirun (an MPI build's main sets it; src/parallel/comm.hpp).
-  // With more than one, each process meshes the case, partitions it (METIS, else coordinate
-  // bisection), runs its part (src/parallel/decompose.hpp) and process 0 writes the outputs
-  // (docs/parallel.md: what such a run does not do yet is refused with the key to change).
+  // With more than one, process 0 meshes the case, partitions it (METIS, else coordinate
+  // bisection) and sends each process its part (src/parallel/decompose.hpp); each runs its part
+  // and process 0 writes the outputs (docs/parallel.md: what such a run does not do yet is refused
+  // with the key to change).
   std::shared_ptr<const Comm> comm;
 };
 
