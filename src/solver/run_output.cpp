@@ -111,10 +111,6 @@ template <int D>
 RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out,
                               bool writes, const RunState* restart, const std::string& file)
     : comm_(sim.comm()), out_(out) {
-  if (whole.bodies > 1)
-    throw InputError(c.file + ": output.fragments (the fragment analysis) of " + std::to_string(whole.bodies) +
-                     " bodies is not available yet in a run over several processes (docs/parallel.md); set it "
-                     "to false");
   open_csv(restart, file, writes);
   if (!writes) return;
   // the whole mesh's elements, masses and interfaces (the arrays the labelling reads)
@@ -128,6 +124,12 @@ RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const Hos
   build_elements<D>(c, whole, mats, w);
   w.iface = Kokkos::View<int* [2 * D]>("fdem::fragments::iface", w.ni);
   w.ihist = Kokkos::View<double* [D][4]>("fdem::fragments::ihist", w.ni);
+  // reference positions: the per-body statistics (several initial bodies) place the fragments
+  w.X = Kokkos::View<double* [D]>("fdem::fragments::X", w.nn);
+  auto Xh = Kokkos::create_mirror_view(w.X);
+  for (int n = 0; n < w.nn; ++n)
+    for (int k = 0; k < D; ++k) Xh(n, k) = whole.X[static_cast<size_t>(n) * D + k];
+  Kokkos::deep_copy(w.X, Xh);
   auto fc = Kokkos::create_mirror_view(w.iface);
   for (int q = 0; q < w.ni; ++q)
     for (int k = 0; k < 2 * D; ++k) fc(q, k) = whole.ifaces[static_cast<size_t>(q) * 2 * D + k];
@@ -218,11 +220,11 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
 
 template <int D>
 nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
-  if (bodies_ < 2) return nullptr;
+  if (bodies_ < 2 || !analysis_) return nullptr;  // (over several processes: process 0's)
   std::vector<int> frag;
   element_ids(sim, frag);
   std::vector<double> emass, centroid;
-  element_mass_centroids<D>(sim.m, emass, centroid);
+  element_mass_centroids<D>(whole_ ? *whole_ : sim.m, emass, centroid);
   const auto b = body_fragments(body_, bodies_, frag, analysis_->masses(), emass, centroid);
   write_bodies_csv(out_ + "/bodies.csv", b, D);
   return body_fragments_summary(b, out_ + "/bodies.csv");

@@ -60,8 +60,7 @@ class RunFragments {
   // A run over several processes (sim.comm()): `whole` is the whole mesh. Process 0 (`writes`)
   // keeps the whole mesh's elements and interfaces and labels its fragments from every process's
   // interface histories, gathered at each call below (which every process makes, at the same
-  // steps); the others only send theirs. InputError for several initial bodies (their per-body
-  // statistics need the whole positions: not yet). restart: as above.
+  // steps); the others only send theirs. restart: as above.
   RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out, bool writes,
                const RunState* restart = nullptr, const std::string& file = "");
   // Statistics of the present state (labelled once per step).

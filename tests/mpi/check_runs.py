@@ -81,6 +81,12 @@ AFTER_TOL = {"impact2d": 1e-4}
 FRAGMENTING = ("cases/particle_impact_3d/case.json",
                COMMON + ["parameters.h=0.006", "parameters.speed=40", "time.max_steps=4000",
                          "output.history_rows=300", "output.snapshot_count=3"])
+# several initial bodies: the multi-particle impact (200 particles), fast, contact off (they do not
+# meet each other in 3000 steps; the plate is a platen): one particle breaks in two. bodies.csv
+# and summary.json's per-body statistics on 3 processes as on 1 (measured: the same bytes)
+BODIES = ("cases/particle_impact_3d/multi/case.json",
+          COMMON + ["parameters.h=0.008", "parameters.speed=60", "time.max_steps=3000",
+                    "output.snapshot_count=0"])
 ENERGY = ["E_kinetic [J]", "E_strain [J]", "E_interface [J]", "E_contact [J]", "D_fracture [J]",
           "D_damping [J]", "W_external [J]"]
 failures = []
@@ -302,6 +308,26 @@ def main():
             c = h.index(col)
             check(abs(a[-1][c] - b[-1][c]) <= tol * a[-1][c] + 1,
                   f"fragmenting, {n} processes: {col} {b[-1][c]:.0f} against {a[-1][c]:.0f}")
+
+    print("several bodies: per-body fragment statistics")
+    got = {}
+    for n in (1, 3):
+        out = os.path.join(WORK, f"bodies-{n}")
+        r = run(fdem, n, BODIES[0], BODIES[1], out)
+        check(r.returncode == 0 and os.path.exists(os.path.join(out, "bodies.csv")),
+              f"multi-particle impact, {n} process(es): exit {r.returncode}, bodies.csv written")
+        if r.returncode == 0:
+            with open(os.path.join(out, "summary.json")) as f:
+                pb = json.load(f)["fragments"].get("per_body", {})
+            pb.pop("file", None)
+            got[n] = (pb, history(os.path.join(out, "bodies.csv")))
+    if 1 in got and 3 in got:
+        (pa, (ha, ra)), (pb, (hb, rb)) = got[1], got[3]
+        same = ha == hb and len(ra) == len(rb) and all(
+            abs(x - y) <= 1e-9 * max(abs(x), 1e-300) for a, b in zip(ra, rb) for x, y in zip(a, b))
+        check(same and pa == pb and pa.get("broken", 0) >= 1,
+              f"multi-particle impact, 3 processes: bodies.csv ({len(rb)} bodies) and the per-body summary as on 1 "
+              f"({pa.get('broken')} broken, {pb.get('broken')} on 3)")
 
     print("refusals and failures")
     r = run(fdem, 2, "cases/brazilian_disc/case.json", [], os.path.join(WORK, "refused"), timeout=120)
