@@ -324,6 +324,7 @@ class Unpacker {
   }
   void take(void* p, size_t n) {
     if (n > b_.size() - at_) throw InputError("unpack_submesh: the data ends early (damaged)");
+    if (n == 0) return;  // (an empty vector's data() may be null: no memcpy)
     std::memcpy(p, b_.data() + at_, n);
     at_ += n;
   }
