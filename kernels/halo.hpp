@@ -3,9 +3,8 @@
 // device: after the node update each part packs the positions of its own nodes that other parts
 // hold as ghosts into one buffer, the buffers travel (in one process: exchange_in_process; over
 // MPI: the same buffers handed to MPI), and each part unpacks what it received into its ghost
-// nodes. Positions only: the
-// force pass reads no velocity (the node update, which does, covers the own nodes only). The
-// ghosts' forces are zeroed at the unpack (they are never used).
+// nodes. Positions only: the force pass reads no velocity (the node update, which does, covers
+// the own nodes only). The ghosts' forces are zeroed at the unpack (they are never used).
 #include <algorithm>
 #include <string>
 #include <utility>

@@ -3,6 +3,7 @@
 // does not see MPI: an MPI build (-DFDEM_ENABLE_MPI=ON) implements this interface in
 // src/parallel/mpi/comm_mpi.cpp, and fdem's main hands it to run_case (RunOptions::comm) when it
 // runs under mpirun on more than one process. Host only; called between kernels, never inside.
+#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
@@ -38,5 +39,24 @@ class Comm {
   // Ends every process of the run now (after an error on one of them: the others would wait for it).
   [[noreturn]] virtual void abort(int code) const = 0;
 };
+
+// Rows of `width` values of a process's own items (row i at local[i * width], i < own) gathered on
+// process 0 into the whole mesh's order (row ids[i] of whole_n rows; whole_n is read on process 0
+// only); an empty vector on the other processes.
+inline std::vector<double> gather_rows(const Comm& comm, const double* local, size_t own, size_t width,
+                                       const std::vector<int>& ids, size_t whole_n) {
+  std::vector<double> mine, all;
+  mine.reserve(own * (1 + width));
+  for (size_t i = 0; i < own; ++i) {
+    mine.push_back(ids[i]);
+    mine.insert(mine.end(), local + i * width, local + (i + 1) * width);
+  }
+  comm.gather(mine, all);
+  if (comm.rank() != 0) return {};
+  std::vector<double> out(whole_n * width, 0.0);
+  for (size_t j = 0; j + 1 + width <= all.size(); j += 1 + width)
+    std::copy(all.begin() + j + 1, all.begin() + j + 1 + width, out.begin() + static_cast<size_t>(all[j]) * width);
+  return out;
+}
 
 }  // namespace fdem

@@ -238,7 +238,8 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
 
 namespace {
 
-// The byte stream of pack_submesh: plain values, vectors of them, strings and maps, in order.
+// The byte stream of pack_submesh: plain values, strings, vectors and string-keyed maps of them,
+// in order; a vector of plain values in one piece.
 class Packer {
  public:
   std::vector<char> bytes;
@@ -248,23 +249,19 @@ class Packer {
     const char* p = reinterpret_cast<const char*>(&v);
     bytes.insert(bytes.end(), p, p + sizeof(T));
   }
-  template <class T>
-  void put(const std::vector<T>& v) {
-    put(static_cast<long long>(v.size()));
-    const char* p = reinterpret_cast<const char*>(v.data());
-    bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
-  }
   void put(const std::string& v) {
     put(static_cast<long long>(v.size()));
     bytes.insert(bytes.end(), v.begin(), v.end());
   }
-  void put(const std::vector<std::string>& v) {
+  template <class T>
+  void put(const std::vector<T>& v) {
     put(static_cast<long long>(v.size()));
-    for (const auto& x : v) put(x);
-  }
-  void put(const std::vector<std::vector<int>>& v) {
-    put(static_cast<long long>(v.size()));
-    for (const auto& x : v) put(x);
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      const char* p = reinterpret_cast<const char*>(v.data());
+      bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
+    } else {
+      for (const auto& x : v) put(x);
+    }
   }
   template <class T>
   void put(const std::map<std::string, T>& v) {
@@ -284,22 +281,19 @@ class Unpacker {
     static_assert(std::is_trivially_copyable_v<T>, "plain values");
     take(&v, sizeof(T));
   }
-  template <class T>
-  void get(std::vector<T>& v) {
-    v.resize(count(sizeof(T)));
-    take(v.data(), v.size() * sizeof(T));
-  }
   void get(std::string& v) {
     v.resize(count(1));
     take(v.data(), v.size());
   }
-  void get(std::vector<std::string>& v) {
-    v.resize(count(1));
-    for (auto& x : v) get(x);
-  }
-  void get(std::vector<std::vector<int>>& v) {
-    v.resize(count(1));
-    for (auto& x : v) get(x);
+  template <class T>
+  void get(std::vector<T>& v) {
+    if constexpr (std::is_trivially_copyable_v<T>) {
+      v.resize(count(sizeof(T)));
+      take(v.data(), v.size() * sizeof(T));
+    } else {
+      v.resize(count(1));
+      for (auto& x : v) get(x);
+    }
   }
   template <class T>
   void get(std::map<std::string, T>& v) {

@@ -142,24 +142,20 @@ RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const Hos
 // process 0.
 template <int D>
 void RunFragments<D>::gather_histories(const Simulation<D>& sim) {
-  const auto& ids = sim.own_ifaces_global();
+  const size_t own = static_cast<size_t>(sim.m.owned_ifaces()), w = 4 * D;
   auto h = Kokkos::create_mirror_view(sim.m.ihist);
   Kokkos::deep_copy(h, sim.m.ihist);
-  std::vector<double> mine, all;
-  mine.reserve(ids.size() * (1 + 4 * D));
-  for (size_t q = 0; q < ids.size(); ++q) {
-    mine.push_back(ids[q]);
+  std::vector<double> rows(own * w);
+  for (size_t q = 0; q < own; ++q)
     for (int k = 0; k < D; ++k)
-      for (int a = 0; a < 4; ++a) mine.push_back(h(q, k, a));
-  }
-  comm_->gather(mine, all);
+      for (int a = 0; a < 4; ++a) rows[q * w + 4 * k + a] = h(q, k, a);
+  const std::vector<double> all =
+      gather_rows(*comm_, rows.data(), own, w, sim.ifaces_global(), whole_ ? static_cast<size_t>(whole_->ni) : 0);
   if (!whole_) return;
   auto wh = Kokkos::create_mirror_view(whole_->ihist);
-  for (size_t j = 0; j < all.size(); j += 1 + 4 * D) {
-    const int q = static_cast<int>(all[j]);
+  for (int q = 0; q < whole_->ni; ++q)
     for (int k = 0; k < D; ++k)
-      for (int a = 0; a < 4; ++a) wh(q, k, a) = all[j + 1 + 4 * k + a];
-  }
+      for (int a = 0; a < 4; ++a) wh(q, k, a) = all[q * w + 4 * k + a];
   Kokkos::deep_copy(whole_->ihist, wh);
 }
 

@@ -101,9 +101,9 @@ class Simulation {
   // elements) is over all processes, the same on each.
   void set_decomposition(std::shared_ptr<const Comm> comm, const SubMesh& part);
   const Comm* comm() const { return comm_.get(); }
-  // Over several processes: the whole mesh's index of each counted interface (the first
-  // owned_ifaces() of m).
-  const std::vector<int>& own_ifaces_global() const { return iface_global_; }
+  // Over several processes: the whole mesh's index of each local interface (the counted ones,
+  // first owned_ifaces() of m, then the others).
+  const std::vector<int>& ifaces_global() const { return iface_global_; }
   // Bytes of ghost positions this process sends per step (0 on one process).
   long exchange_bytes() const { return halo_ ? halo_->send_bytes() : 0; }
   // Work skipped because the scene does not need it (the results are the same either way; the
@@ -187,10 +187,9 @@ class Simulation {
   ForceScatter<D> scatter_;
   std::shared_ptr<const Comm> comm_;  // null: one process
   std::unique_ptr<Halo<D>> halo_;
-  // over several processes: the whole mesh's index of each own node, element and interface, and
-  // the whole mesh's counts
+  // over several processes: the whole mesh's index of each local node, element and interface
+  // (the own ones first: m.owned_*()), and the whole mesh's counts
   std::vector<int> node_global_, elem_global_, iface_global_;
-  std::vector<int> local_node_global_, local_iface_global_;  // every local item's, ghosts too
   long whole_nn_ = 0, whole_ne_ = 0, whole_ni_ = 0;
   void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                     std::vector<double>& stress, std::vector<double>& damage);

@@ -16,17 +16,12 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
     throw InputError("set_decomposition: the model was not built from this part's mesh");
   comm_ = std::move(comm);
   halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv);
-  node_global_.assign(part.node_global.begin(), part.node_global.begin() + m.owned_nodes());
-  elem_global_.assign(part.elem_global.begin(), part.elem_global.begin() + m.owned_elems());
-  iface_global_.assign(part.iface_global.begin(), part.iface_global.begin() + m.owned_ifaces());
-  local_node_global_ = part.node_global;
-  local_iface_global_ = part.iface_global;
-  double counts[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
-                      static_cast<double>(m.owned_ifaces())};
-  comm_->sum(counts, 3);
-  whole_nn_ = static_cast<long>(counts[0]);
-  whole_ne_ = static_cast<long>(counts[1]);
-  whole_ni_ = static_cast<long>(counts[2]);
+  node_global_ = part.node_global;
+  elem_global_ = part.elem_global;
+  iface_global_ = part.iface_global;
+  whole_nn_ = part.whole_nodes;
+  whole_ne_ = part.whole_elems;
+  whole_ni_ = part.whole_ifaces;
   // the time step: the smallest contributions over the processes, decided as one run would
   StepContributions& sc = step_sources_;
   double v[5] = {sc.bulk, sc.interfaces, sc.platens, sc.contact, sc.platens_on_surfaces};
@@ -60,48 +55,15 @@ void Simulation<D>::exchange_ghosts() {
   phase_times_.exchange += clock.seconds();  // pack, MPI and the unpack's launch
 }
 
-// The own part of each array (with the whole mesh's index) gathered on process 0 and put in the
-// whole mesh's order there; empty arrays on the other processes.
+// The own rows of each field gathered on process 0 in the whole mesh's order; empty elsewhere.
 template <int D>
 void Simulation<D>::gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                                  std::vector<double>& stress, std::vector<double>& damage) {
-  std::vector<double> mine, all;
-  // nodes: id, x, u, v
-  for (size_t i = 0; i < node_global_.size(); ++i) {
-    mine.push_back(node_global_[i]);
-    for (const auto* a : {&x, &u, &v})
-      for (int k = 0; k < D; ++k) mine.push_back((*a)[i * D + k]);
-  }
-  comm_->gather(mine, all);
-  const bool root = comm_->rank() == 0;
-  for (auto* a : {&x, &u, &v}) a->assign(root ? static_cast<size_t>(whole_nn_) * D : 0, 0.0);
-  for (size_t j = 0; root && j < all.size(); j += 1 + 3 * D) {
-    const size_t n = static_cast<size_t>(all[j]);
-    for (int k = 0; k < D; ++k) {
-      x[n * D + k] = all[j + 1 + k];
-      u[n * D + k] = all[j + 1 + D + k];
-      v[n * D + k] = all[j + 1 + 2 * D + k];
-    }
-  }
-  // elements: id, 6 stress components
-  mine.clear();
-  for (size_t e = 0; e < elem_global_.size(); ++e) {
-    mine.push_back(elem_global_[e]);
-    mine.insert(mine.end(), stress.begin() + e * 6, stress.begin() + e * 6 + 6);
-  }
-  comm_->gather(mine, all);
-  stress.assign(root ? static_cast<size_t>(whole_ne_) * 6 : 0, 0.0);
-  for (size_t j = 0; root && j < all.size(); j += 7)
-    std::copy(all.begin() + j + 1, all.begin() + j + 7, stress.begin() + static_cast<size_t>(all[j]) * 6);
-  // interfaces: id, damage
-  mine.clear();
-  for (size_t q = 0; q < iface_global_.size(); ++q) {
-    mine.push_back(iface_global_[q]);
-    mine.push_back(damage[q]);
-  }
-  comm_->gather(mine, all);
-  damage.assign(root ? static_cast<size_t>(whole_ni_) : 0, 0.0);
-  for (size_t j = 0; root && j < all.size(); j += 2) damage[static_cast<size_t>(all[j])] = all[j + 1];
+  const size_t nn = static_cast<size_t>(m.owned_nodes()), ne = static_cast<size_t>(m.owned_elems()),
+               ni = static_cast<size_t>(m.owned_ifaces());
+  for (auto* a : {&x, &u, &v}) *a = gather_rows(*comm_, a->data(), nn, D, node_global_, whole_nn_);
+  stress = gather_rows(*comm_, stress.data(), ne, 6, elem_global_, whole_ne_);
+  damage = gather_rows(*comm_, damage.data(), ni, 1, iface_global_, whole_ni_);
 }
 
 namespace {
@@ -160,29 +122,20 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     if (absent > 0) continue;
     const bool integer = local.i64.count(e.name) > 0;
     const std::vector<double> v = entry_values(local, e.name);
-    const std::vector<int>& own = e.nodes ? node_global_ : iface_global_;
     const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
-    const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
+    const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
     if (v.size() != blocks * n * w)
       throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
                        " values, not " + std::to_string(blocks * n * w));
-    std::vector<double> mine, all;
-    mine.reserve(own.size() * (1 + blocks * w));
-    for (size_t i = 0; i < own.size(); ++i) {
-      mine.push_back(own[i]);
-      for (size_t b = 0; b < blocks; ++b)
-        for (size_t k = 0; k < w; ++k) mine.push_back(v[(b * n + i) * w + k]);
+    std::vector<double> out;
+    for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
+      const std::vector<double> rows = gather_rows(*comm_, v.data() + b * n * w, own, w,
+                                                   e.nodes ? node_global_ : iface_global_,
+                                                   static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_));
+      out.insert(out.end(), rows.begin(), rows.end());
     }
-    comm_->gather(mine, all);
     if (!root) continue;
-    std::vector<double> out(blocks * whole_n * w, 0.0);
-    const size_t row = 1 + blocks * w;
-    for (size_t j = 0; j + row <= all.size(); j += row) {
-      const size_t g = static_cast<size_t>(all[j]);
-      for (size_t b = 0; b < blocks; ++b)
-        for (size_t k = 0; k < w; ++k) out[(b * whole_n + g) * w + k] = all[j + 1 + b * w + k];
-    }
     whole.f64.erase(e.name);
     whole.i64.erase(e.name);
     put_entry(whole, e.name, out, integer);
@@ -197,11 +150,6 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
     whole.f64[name] = total;
     whole.f64[kProcessesPrefix + name] = all;
-  }
-  if (local.i64.count("model/icontact_pending")) {  // set if set on any process
-    double p = -static_cast<double>(local.i64.at("model/icontact_pending").at(0) != 0);
-    comm_->min(&p, 1);
-    if (root) whole.put_int("model/icontact_pending", p < 0 ? 1 : 0);
   }
   if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
 }
@@ -228,7 +176,7 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
     // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
     // interface's (each part computes its interfaces from the same history)
     const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
-    const std::vector<int>& ids = e.nodes ? local_node_global_ : local_iface_global_;
+    const std::vector<int>& ids = e.nodes ? node_global_ : iface_global_;
     for (size_t b = 0; b < blocks; ++b)
       for (size_t i = 0; i < rows; ++i)
         for (size_t k = 0; k < w; ++k)
