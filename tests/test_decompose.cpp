@@ -21,6 +21,7 @@
 #include "mesh/mesh.hpp"
 #include "parallel/decompose.hpp"
 #include "parallel/partition.hpp"
+#include "solver/contact_topology.hpp"
 #include "solver/run.hpp"
 #include "solver/simulation.hpp"
 #include "solver_fixtures.hpp"
@@ -55,10 +56,11 @@ HostMesh half_fracturable_box() {
   return m;
 }
 
-void check_decomposition(const HostMesh& whole, int parts, PartitionMethod method) {
-  SCOPED_TRACE(std::to_string(parts) + " parts, " + partition_method_name(method));
+void check_decomposition(const HostMesh& whole, int parts, PartitionMethod method, double reach = 0) {
+  SCOPED_TRACE(std::to_string(parts) + " parts, " + partition_method_name(method) + ", contact reach " +
+               std::to_string(reach));
   const std::vector<int> part = partition_elements(whole, parts, method);
-  const std::vector<SubMesh> subs = decompose(whole, part, parts);
+  const std::vector<SubMesh> subs = decompose(whole, part, parts, reach);
   ASSERT_EQ(static_cast<int>(subs.size()), parts);
   const int D = whole.dim, nn = whole.num_nodes(), ne = whole.num_elems(), ni = whole.num_ifaces();
   std::vector<int> elem_owned(ne, 0), node_owned(nn, 0), iface_counted(ni, 0);
@@ -136,6 +138,161 @@ TEST(Decompose, EveryItemOwnedOnceAndEveryOwnNodeComplete) {
   }
   check_decomposition(disc, 3, PartitionMethod::Block);
   if (partition_has_metis()) check_decomposition(box, 4, PartitionMethod::Metis);
+  // with a contact zone the same holds (the zone only adds ghosts)
+  check_decomposition(disc, 3, PartitionMethod::Rcb, 2.5 * mesh_quality(disc).mean_size);
+  check_decomposition(box, 4, PartitionMethod::Rcb, 0.3);
+}
+
+// The distance from point x to element e's bounding box.
+double box_distance(const HostMesh& m, int e, const double* x) {
+  const int D = m.dim;
+  double d2 = 0;
+  for (int k = 0; k < D; ++k) {
+    double lo = 1e300, hi = -1e300;
+    for (int a = 0; a <= D; ++a) {
+      const double c = m.X[D * static_cast<size_t>(m.elems[(D + 1) * e + a]) + k];
+      lo = std::min(lo, c);
+      hi = std::max(hi, c);
+    }
+    const double d = x[k] < lo ? lo - x[k] : (x[k] > hi ? x[k] - hi : 0.0);
+    d2 += d * d;
+  }
+  return std::sqrt(d2);
+}
+
+// The face's node ids, sorted.
+std::vector<int> face_key(const std::vector<int>& faces, size_t f, int D, const std::vector<int>* map = nullptr) {
+  std::vector<int> k(faces.begin() + f * D, faces.begin() + (f + 1) * D);
+  if (map)
+    for (int& n : k) n = (*map)[n];
+  std::sort(k.begin(), k.end());
+  return k;
+}
+
+// With contact (decompose's contact reach): each part holds every element whose bounding box comes
+// within the reach of one of its own nodes (brute force over all pairs), the interfaces at their
+// nodes, and as outer faces exactly the whole mesh's outer faces whose element it holds; every
+// ghost is exchanged; the whole mesh's piece count and thinnest element travel with the part.
+TEST(Decompose, ContactZoneHoldsEveryElementWithinReach) {
+  HostMesh disc;
+  fast_disc(disc);
+  const HostMesh box = half_fracturable_box();
+  for (const HostMesh* whole : std::vector<const HostMesh*>{&disc, &box}) {
+    const int D = whole->dim, parts = 3;
+    const double reach = (D == 2 ? 2.0 : 0.5) * mesh_quality(*whole).mean_size;
+    SCOPED_TRACE(std::to_string(D) + "D, reach " + std::to_string(reach));
+    const std::vector<int> part = partition_elements(*whole, parts, PartitionMethod::Rcb);
+    const std::vector<SubMesh> subs = decompose(*whole, part, parts, reach);
+    const std::vector<int> outer = boundary_faces(*whole);
+    std::set<std::vector<int>> outer_keys;
+    for (size_t f = 0; f < outer.size() / D; ++f) outer_keys.insert(face_key(outer, f, D));
+    const int pieces = count_bodies(*whole);
+    int partial = 0;  // parts that hold less than the whole mesh
+    for (const SubMesh& s : subs) {
+      const HostMesh& m = s.mesh;
+      EXPECT_EQ(s.contact_reach, reach);
+      EXPECT_EQ(s.inert_ghosts, 0);
+      EXPECT_EQ(m.pieces, pieces);
+      EXPECT_EQ(m.whole_min_size, mesh_quality(*whole).min_size);
+      const std::set<int> els(s.elem_global.begin(), s.elem_global.end());
+      const std::set<int> ifs(s.iface_global.begin(), s.iface_global.end());
+      int zone = 0;
+      for (int e = 0; e < whole->num_elems(); ++e) {
+        if (part[e] == s.part) continue;
+        double near = 1e300;
+        for (int i = 0; i < m.owned_nodes; ++i) near = std::min(near, box_distance(*whole, e, &m.X[D * static_cast<size_t>(i)]));
+        if (near > reach) continue;
+        ASSERT_TRUE(els.count(e)) << "element " << e << " at " << near << " of an own node";
+        ++zone;
+        for (int a = 0; a <= D; ++a)  // the interfaces at its nodes
+          for (int q = 0; q < whole->num_ifaces(); ++q)
+            for (int b = 0; b < 2 * D; ++b) {
+              if (whole->ifaces[2 * D * q + b] == whole->elems[(D + 1) * e + a]) {
+                ASSERT_TRUE(ifs.count(q)) << q;
+              }
+            }
+      }
+      EXPECT_GT(zone, 0);
+      // outer faces: whole-mesh outer faces, and all of those whose element the part holds
+      std::set<std::vector<int>> mine;
+      for (size_t f = 0; f < m.outer_faces.size() / D; ++f) {
+        const auto k = face_key(m.outer_faces, f, D, &s.node_global);
+        ASSERT_TRUE(outer_keys.count(k));
+        mine.insert(k);
+      }
+      EXPECT_EQ(mine.size(), m.outer_faces.size() / D);  // each once
+      for (size_t j = 0; j < s.elem_global.size(); ++j) {
+        const int e = s.elem_global[j];
+        for (int skip = 0; skip <= D; ++skip) {
+          std::vector<int> k;
+          for (int a = 0; a <= D; ++a) {
+            if (a != skip) k.push_back(whole->elems[(D + 1) * e + a]);
+          }
+          std::sort(k.begin(), k.end());
+          if (outer_keys.count(k)) {
+            ASSERT_TRUE(mine.count(k)) << "outer face of element " << e;
+          }
+        }
+      }
+      // a part that holds less than the whole mesh has more boundary (where its ghosts end) than
+      // outer faces: that is why outer_faces exist
+      partial += s.elem_global.size() < static_cast<size_t>(whole->num_elems());
+      if (s.elem_global.size() < static_cast<size_t>(whole->num_elems()))
+        EXPECT_GT(boundary_faces(m).size(), m.outer_faces.size());
+      else
+        EXPECT_EQ(boundary_faces(m).size(), m.outer_faces.size());
+      const SubMesh u = unpack_submesh(pack_submesh(s));
+      EXPECT_EQ(u.contact_reach, s.contact_reach);
+      EXPECT_EQ(u.mesh.outer_faces, m.outer_faces);
+      EXPECT_EQ(u.mesh.pieces, m.pieces);
+      EXPECT_EQ(u.mesh.whole_min_size, m.whole_min_size);
+    }
+    EXPECT_GT(partial, 0);
+  }
+}
+
+// The forces on ghosts go back to their owners (Halo::pack_forces, add_forces): each own node gets
+// the force every part that holds it as a ghost put there, added to its own.
+TEST(Decompose, GhostForcesGoBackToTheirOwners) {
+  const HostMesh box = half_fracturable_box();
+  const int parts = 4, D = 3;
+  const auto subs = decompose(box, partition_elements(box, parts, PartitionMethod::Rcb), parts, 0.3);
+  std::vector<NodeData<D>> nd(parts);
+  std::vector<Halo<D>> halos;
+  std::vector<const NodeData<D>*> ptr;
+  std::vector<int> held(box.num_nodes(), 0);  // parts holding each node as a ghost
+  for (int p = 0; p < parts; ++p) {
+    const SubMesh& s = subs[p];
+    nd[p].nn = s.mesh.num_nodes();
+    nd[p].nn_own = s.mesh.owned_nodes;
+    nd[p].f = Kokkos::View<double* [D]>("f", nd[p].nn);
+    auto f = Kokkos::create_mirror_view(nd[p].f);
+    for (int i = 0; i < nd[p].nn; ++i) {  // own: 1000 + node; ghost: part + 1 (per component)
+      const int g = s.node_global[i];
+      for (int k = 0; k < D; ++k) f(i, k) = i < s.mesh.owned_nodes ? 1000.0 + g + k : p + 1.0;
+      if (i >= s.mesh.owned_nodes) ++held[g];
+    }
+    Kokkos::deep_copy(nd[p].f, f);
+    halos.emplace_back(s.neighbours, s.send, s.recv, /*velocities=*/true);
+  }
+  for (auto& n : nd) ptr.push_back(&n);
+  return_forces_in_process<D>(halos, ptr);
+  std::vector<double> want(box.num_nodes(), 0.0);  // what the ghosts sent: the sum of (part + 1)
+  for (int p = 0; p < parts; ++p)
+    for (int i = subs[p].mesh.owned_nodes; i < subs[p].mesh.num_nodes(); ++i) want[subs[p].node_global[i]] += p + 1.0;
+  int checked = 0;
+  for (int p = 0; p < parts; ++p) {
+    auto f = Kokkos::create_mirror_view(nd[p].f);
+    Kokkos::deep_copy(f, nd[p].f);
+    for (int i = 0; i < subs[p].mesh.owned_nodes; ++i) {
+      const int g = subs[p].node_global[i];
+      for (int k = 0; k < D; ++k) ASSERT_EQ(f(i, k), 1000.0 + g + k + want[g]) << "node " << g;
+      checked += held[g] > 0;
+    }
+  }
+  EXPECT_GT(checked, 0);
+  EXPECT_EQ(halos[0].force_bytes(), static_cast<long>(halos[0].recv_nodes()) * D * 8);
+  EXPECT_EQ(halos[0].send_bytes(), static_cast<long>(halos[0].send_nodes()) * 2 * D * 8);
 }
 
 TEST(Decompose, RefusesBadPartIdsAndContactNamingTheKey) {

@@ -140,6 +140,7 @@ struct ContactForcesFn {
   ContactSurface<D> S;
   ContactLaw L;
   double dt;
+  int nforce;  // the points from nforce on are only followed (displacement, speed): a part's ghosts
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const {
     auto f = scatter.access();
@@ -153,6 +154,7 @@ struct ContactForcesFn {
     }
     sums.d2max = d2 > sums.d2max ? d2 : sums.d2max;
     sums.v2max = v2 > sums.v2max ? v2 : sums.v2max;
+    if (i >= nforce) return;
     const int b = P.off(s), e = P.off(s + 1);
     if (b == e) return;
     const double Anode = S.narea(s);
@@ -393,12 +395,14 @@ struct ContactForcesFn {
 // The sums go to `pass` (device memory: no wait for the host; ContactSystem::update reads them
 // through contact_account). Cap: the capacity of a node's PairSubset (the tests take a small one
 // to check that the overflow path gives the same sums).
+// nforce: only the first nforce points get their contacts (a part of a decomposed run: its own
+// surface nodes); the others' displacements and speeds still count in the sums.
 template <int D, bool Fric = true, int Cap = kSubsetCap>
-void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np, const PairList<D>& P,
+void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np, int nforce, const PairList<D>& P,
                     const PairScratch<D>& scratch, const ContactSurface<D>& surf, const ContactLaw& law,
                     double dt, const Kokkos::View<double* [D]>& xb, const ForceScatter<D>& sf,
                     const Kokkos::View<ContactSums>& pass) {
-  const ContactForcesFn<D, Fric, Cap> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt};
+  const ContactForcesFn<D, Fric, Cap> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt, nforce};
   Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace>(0, np), fn, pass);
 }
 

@@ -191,6 +191,16 @@ inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag_in,
   return count;
 }
 
+// How many of the first n entries of an ascending list are below `bound`.
+inline int count_below(const Kokkos::View<int*>& list_in, int n, int bound) {
+  auto list = list_in;
+  int count = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::count_below", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i, int& c) { c += list(i) < bound ? 1 : 0; }, count);
+  return count;
+}
+
 // The row of each active face in surf.fgeo (its place in the list of active faces).
 template <int D>
 void face_slots(const ContactSurface<D>& surf, const Kokkos::View<int*>& afaces_in, int na) {

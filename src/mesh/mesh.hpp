@@ -47,6 +47,13 @@ struct HostMesh {
   // The whole mesh's size of each node set (node_sets hold a part's own nodes only): a point load
   // is shared by the whole set's nodes.
   std::map<std::string, long> whole_set_size;
+  // A part with contact (decompose's contact reach > 0): the whole mesh's outer boundary faces
+  // whose nodes the part holds, `dim` local node ids each (a part's own boundary_faces would also
+  // list the faces where its ghost layer ends), and the whole mesh's connected pieces (elements
+  // joined by shared nodes or interfaces; -1: not set).
+  std::vector<int> outer_faces;
+  int pieces = -1;
+  double whole_min_size = 0;  // the whole mesh's smallest element size (contact's penetration depth)
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

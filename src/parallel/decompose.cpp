@@ -1,12 +1,15 @@
 #include "parallel/decompose.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <string>
 #include <type_traits>
 
 #include "common/error.hpp"
+#include "solver/contact_topology.hpp"
 
 namespace fdem {
 
@@ -32,9 +35,110 @@ Rows rows_of(int keys, int count, int per, Key key) {
   return r;
 }
 
+// For each part, the elements of the other parts that come within `reach` of one of its own nodes
+// (the distance from the node to the element's bounding box, at the reference positions), each
+// list ascending. Nodes binned in a uniform grid of cells at least `reach` and the mean element
+// extent wide (at most about 4 cells per node).
+std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::vector<int>& elem_part,
+                                            const std::vector<int>& owner, int parts, double reach) {
+  const int D = whole.dim, npe = D + 1, nn = whole.num_nodes(), ne = whole.num_elems();
+  std::vector<std::vector<int>> zone(parts);
+  if (ne == 0 || nn == 0) return zone;
+  std::vector<double> lo(static_cast<size_t>(ne) * D), hi(static_cast<size_t>(ne) * D);
+  double glo[3] = {0, 0, 0}, ghi[3] = {0, 0, 0}, ext = 0;
+  for (int k = 0; k < D; ++k) {
+    glo[k] = std::numeric_limits<double>::infinity();
+    ghi[k] = -glo[k];
+  }
+  for (int n = 0; n < nn; ++n)
+    for (int k = 0; k < D; ++k) {
+      glo[k] = std::min(glo[k], whole.X[static_cast<size_t>(n) * D + k]);
+      ghi[k] = std::max(ghi[k], whole.X[static_cast<size_t>(n) * D + k]);
+    }
+  for (int e = 0; e < ne; ++e) {
+    double emax = 0;
+    for (int k = 0; k < D; ++k) {
+      double l = std::numeric_limits<double>::infinity(), h = -l;
+      for (int a = 0; a < npe; ++a) {
+        const double x = whole.X[static_cast<size_t>(whole.elems[static_cast<size_t>(e) * npe + a]) * D + k];
+        l = std::min(l, x);
+        h = std::max(h, x);
+      }
+      lo[static_cast<size_t>(e) * D + k] = l;
+      hi[static_cast<size_t>(e) * D + k] = h;
+      emax = std::max(emax, h - l);
+    }
+    ext += emax;
+  }
+  double cell = std::max({reach, ext / ne, 1e-300});
+  long dims[3] = {1, 1, 1};
+  for (;;) {
+    long total = 1;
+    for (int k = 0; k < D; ++k) {
+      dims[k] = static_cast<long>(std::floor((ghi[k] - glo[k]) / cell)) + 1;
+      total *= dims[k];
+    }
+    if (total <= 4L * nn + 64) break;
+    cell *= 1.5;
+  }
+  auto coord = [&](double x, int k) {
+    const long c = static_cast<long>(std::floor((x - glo[k]) / cell));
+    return std::clamp<long>(c, 0, dims[k] - 1);
+  };
+  auto cell_id = [&](const long* c) { return D == 2 ? c[0] + dims[0] * c[1] : c[0] + dims[0] * (c[1] + dims[1] * c[2]); };
+  const long ncell = dims[0] * dims[1] * dims[2];
+  std::vector<long> start(static_cast<size_t>(ncell) + 1, 0);
+  std::vector<long> key(nn);
+  for (int n = 0; n < nn; ++n) {
+    long c[3] = {0, 0, 0};
+    for (int k = 0; k < D; ++k) c[k] = coord(whole.X[static_cast<size_t>(n) * D + k], k);
+    key[n] = cell_id(c);
+    ++start[key[n] + 1];
+  }
+  for (long c = 0; c < ncell; ++c) start[c + 1] += start[c];
+  std::vector<int> items(nn);
+  {
+    std::vector<long> fill(start.begin(), start.end() - 1);
+    for (int n = 0; n < nn; ++n) items[fill[key[n]]++] = n;
+  }
+  std::vector<int> stamp(parts, -1);
+  const double r2 = reach * reach;
+  for (int e = 0; e < ne; ++e) {
+    const double* l = &lo[static_cast<size_t>(e) * D];
+    const double* h = &hi[static_cast<size_t>(e) * D];
+    long c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
+    for (int k = 0; k < D; ++k) {
+      c0[k] = coord(l[k] - reach, k);
+      c1[k] = coord(h[k] + reach, k);
+    }
+    long c[3] = {0, 0, 0};
+    for (c[2] = c0[2]; c[2] <= c1[2]; ++c[2])
+      for (c[1] = c0[1]; c[1] <= c1[1]; ++c[1])
+        for (c[0] = c0[0]; c[0] <= c1[0]; ++c[0]) {
+          const long id = cell_id(c);
+          for (long j = start[id]; j < start[id + 1]; ++j) {
+            const int n = items[j], p = owner[n];
+            if (p == elem_part[e] || stamp[p] == e) continue;
+            double d2 = 0;
+            for (int k = 0; k < D; ++k) {
+              const double x = whole.X[static_cast<size_t>(n) * D + k];
+              const double d = x < l[k] ? l[k] - x : (x > h[k] ? x - h[k] : 0.0);
+              d2 += d * d;
+            }
+            if (d2 <= r2) {
+              stamp[p] = e;
+              zone[p].push_back(e);
+            }
+          }
+        }
+  }
+  return zone;
+}
+
 }  // namespace
 
-std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts) {
+std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
+                               double contact_reach) {
   const int D = whole.dim, npe = D + 1, nn = whole.num_nodes(), ne = whole.num_elems(),
             ni = whole.num_ifaces();
   if (parts < 1) throw InputError("decompose: parts must be at least 1 (got " + std::to_string(parts) + ")");
@@ -66,6 +170,26 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
   for (int e = 0; e < ne; ++e) own_elems[elem_part[e]].push_back(e);
   const Rows n2e = rows_of(nn, ne, npe, enode);
   const Rows n2i = rows_of(nn, ni, 2 * D, inode);
+  // contact: each part's zone, the whole mesh's outer faces and connected pieces
+  const bool zoned = contact_reach > 0;
+  if (zoned && !std::isfinite(contact_reach))
+    throw InputError("decompose: the contact reach must be finite (got " + std::to_string(contact_reach) + ")");
+  const std::vector<std::vector<int>> zones =
+      zoned ? contact_zones(whole, elem_part, owner, parts, contact_reach) : std::vector<std::vector<int>>();
+  const std::vector<int> outer = zoned ? boundary_faces(whole) : std::vector<int>();
+  std::vector<int> outer_elem(outer.size() / std::max(D, 1), -1);  // the element of each outer face
+  for (size_t f = 0; f < outer_elem.size(); ++f) {
+    const int n0 = outer[f * D];
+    for (int k = n2e.start[n0]; k < n2e.start[n0 + 1] && outer_elem[f] < 0; ++k) {
+      const int e = n2e.items[k];
+      int found = 0;
+      for (int a = 0; a < D; ++a)
+        for (int b = 0; b < npe; ++b) found += enode(e, b) == outer[f * D + a];
+      if (found == D) outer_elem[f] = e;
+    }
+  }
+  const int pieces = zoned ? count_bodies(whole) : -1;
+  const double min_size = zoned ? mesh_quality(whole).min_size : 0.0;
 
   std::vector<SubMesh> out(parts);
   std::vector<int> emark(ne, -1), imark(ni, -1), nmark(nn, -1);  // stamped with the part
@@ -79,13 +203,15 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
     s.whole_nodes = nn;
     s.whole_elems = ne;
     s.whole_ifaces = whole.num_ifaces();
+    s.contact_reach = contact_reach;
     std::vector<int> ifs, els, nds;
-    for (int n : own_nodes[p])
+    auto add_ifaces_at = [&](int n) {
       for (int k = n2i.start[n]; k < n2i.start[n + 1]; ++k)
         if (imark[n2i.items[k]] != p) {
           imark[n2i.items[k]] = p;
           ifs.push_back(n2i.items[k]);
         }
+    };
     auto add_elem = [&](int e) {
       if (emark[e] != p) {
         emark[e] = p;
@@ -95,6 +221,13 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
     for (int e : own_elems[p]) add_elem(e);
     for (int n : own_nodes[p])
       for (int k = n2e.start[n]; k < n2e.start[n + 1]; ++k) add_elem(n2e.items[k]);
+    if (zoned) {  // the contact zone, and the interfaces at every node held so far
+      for (int e : zones[p]) add_elem(e);
+      for (size_t j = 0; j < els.size(); ++j)
+        for (int a = 0; a < npe; ++a) add_ifaces_at(enode(els[j], a));
+    } else {
+      for (int n : own_nodes[p]) add_ifaces_at(n);
+    }
     for (int q : ifs)
       for (int side = 0; side < 2; ++side) add_elem(whole.iface_elems[2 * static_cast<size_t>(q) + side]);
     const size_t e1 = els.size();
@@ -134,6 +267,8 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
       for (int a = 0; a < npe; ++a) nlocal[enode(els[j], a)] = 1;
     for (int q : ifs)
       for (int a = 0; a < 2 * D; ++a) nlocal[inode(q, a)] = 1;
+    if (zoned)  // contact reads every ghost (the faces and nodes of the zone, their velocities)
+      for (int n : nds) nlocal[n] = 1;
     std::sort(nds.begin(), nds.end(), [&](int a, int b) {
       const bool ra = nlocal[a] == 1, rb = nlocal[b] == 1;
       return ra != rb ? ra : a < b;
@@ -182,6 +317,16 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
       for (int a = 0; a < 2 * D; ++a) m.ifaces.push_back(nlocal[inode(q, a)]);
       for (int side = 0; side < 2; ++side)
         m.iface_elems.push_back(elocal[whole.iface_elems[2 * static_cast<size_t>(q) + side]]);
+    }
+    if (zoned) {
+      m.pieces = pieces;
+      m.whole_min_size = min_size;
+      const size_t nbf = outer.size() / D;
+      for (size_t f = 0; f < nbf; ++f) {
+        const bool held = outer_elem[f] >= 0 && elocal[outer_elem[f]] >= 0;  // its element (and so its nodes)
+        if (held)
+          for (int a = 0; a < D; ++a) m.outer_faces.push_back(nlocal[outer[f * D + a]]);
+      }
     }
     for (const auto& [name, set] : whole.node_sets) {
       m.whole_set_size[name] = static_cast<long>(set.size());
@@ -353,6 +498,10 @@ void submesh_fields(S& s, F&& f) {
   f(m.owned_ifaces);
   f(m.bulk_elems);
   f(m.whole_set_size);
+  f(m.outer_faces);
+  f(m.pieces);
+  f(m.whole_min_size);
+  f(s.contact_reach);
   f(s.node_global);
   f(s.elem_global);
   f(s.iface_global);

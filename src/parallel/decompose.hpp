@@ -54,13 +54,21 @@ struct SubMesh {
   // The last inert_ghosts nodes: ghosts that no step reads (nodes only of ghost elements without
   // a bulk force, in no local interface): never exchanged, they stay where they start.
   int inert_ghosts = 0;
+  // Contact (decompose's contact_reach > 0): the part also holds, as ghosts, every element that
+  // comes within this distance of one of its own nodes (at the reference positions) and the
+  // interfaces at their nodes, and every ghost is exchanged; 0: no contact zone.
+  double contact_reach = 0;
   int ghost_nodes() const { return mesh.num_nodes() - mesh.owned_nodes; }
   int ghost_elems() const { return mesh.num_elems() - mesh.owned_elems; }
 };
 
 // Every part's share of `whole` (after insert_interfaces), for part ids `elem_part` in
 // [0, parts). InputError when elem_part does not have one valid id per element. Deterministic.
-std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts);
+// contact_reach > 0 (a run with contact): each part also holds its contact zone (SubMesh::
+// contact_reach), the whole mesh's outer faces it holds (HostMesh::outer_faces) and the whole
+// mesh's piece count (HostMesh::pieces).
+std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
+                               double contact_reach = 0);
 
 // A part as bytes (for sending it to its process) and back; unpack_submesh throws InputError on
 // data that does not unpack exactly (damaged or cut short).
