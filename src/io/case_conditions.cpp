@@ -143,7 +143,7 @@ void read_platens(json& doc, Case& c, const Reader& R) {
 void read_contact(json& doc, Case& c, const Reader& R) {
   json& ct = R.object(doc, "", "contact", false);
   const std::string P = "contact";
-  R.keys(ct, P, {"enabled", "kn", "ks", "friction", "cohesion", "skin"});
+  R.keys(ct, P, {"enabled", "kn", "ks", "friction", "cohesion", "skin", "zone"});
   auto it = ct.find("enabled");
   if (it == ct.end()) {
     ct["enabled"] = "auto";
@@ -160,6 +160,7 @@ void read_contact(json& doc, Case& c, const Reader& R) {
   c.contact.friction = R.number(ct, P, "friction", ge(0), default_contact_friction(c));
   c.contact.cohesion = R.number(ct, P, "cohesion", ge(0), 0.0);
   c.contact.skin = R.number(ct, P, "skin", ge(0), 0.0);
+  c.contact.zone = R.number(ct, P, "zone", ge(0), 0.0);
 }
 
 void read_damping(json& doc, Case& c, const Reader& R) {

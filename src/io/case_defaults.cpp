@@ -81,6 +81,9 @@ void resolve_with(Case& c, const MeanSize& mean_size) {
   // in proportion to the candidates, which grow with the search distance dpen + skin, and a
   // rebuild costs about ten narrow-phase passes; the results do not depend on it
   if (unset(ct.skin)) show(doc, "skin", ct.skin = 0.02 * mean_size());
+  // zone (runs over several processes): the room nodes have to move before a process could need a
+  // face it does not hold (docs/parallel.md "Contact"); more room, more ghosts
+  if (unset(ct.zone)) show(doc, "zone", ct.zone = 3.0 * mean_size());
 }
 
 }  // namespace

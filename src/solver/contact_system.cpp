@@ -17,6 +17,11 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   nn_ = mesh.num_nodes();
   ni_ = mesh.num_ifaces();
   ne_ = mesh.num_elems();
+  part_ = mesh.owned_nodes >= 0;
+  nown_ = part_ ? mesh.owned_nodes : nn_;
+  if (part_ && mesh.pieces < 0)
+    throw InputError(c.file + ": contact: a part of a decomposed mesh needs its contact zone (decompose with a "
+                     "contact reach)");
   set_law(c, mesh);
   ContactFaces faces = contact_faces<D>(c, mesh);
   nf_ = faces.nf;
@@ -24,7 +29,7 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   stable_ = contact_stable_step(shares.area, mass);
   potential_area_ = std::move(shares.area);
   HostVertexGroups groups = vertex_groups<D>(mesh);
-  bodies_ = count_bodies(mesh);
+  bodies_ = part_ ? mesh.pieces : count_bodies(mesh);  // a part: the whole mesh's
   may_meet_ = bodies_ > 1;
   upload(faces, shares, groups, m);
   allocate_work();
@@ -57,7 +62,9 @@ void ContactSystem<D>::set_law(const Case& c, const HostMesh& mesh) {
   law.coh = c.contact.cohesion;
   // A node deeper than a quarter of the thinnest element behind a face is not in contact with it
   // (it would be nearer the face's back side); coplanar faces are within 30 degrees.
-  law.dpen = 0.25 * (mq.min_size > 0 ? mq.min_size : hmean);
+  // (a part of a decomposed mesh: the whole mesh's thinnest element, as on one process)
+  const double min_size = mesh.owned_nodes >= 0 ? mesh.whole_min_size : mq.min_size;
+  law.dpen = 0.25 * (min_size > 0 ? min_size : hmean);
   law.tol = 0.01;
   law.cos_same = std::cos(30.0 * M_PI / 180.0);
   skin = c.contact.skin;
@@ -73,7 +80,7 @@ double ContactSystem<D>::contact_stable_step(const std::vector<double>& area,
                                              const std::vector<double>& mass) const {
   double dt = std::numeric_limits<double>::infinity();
   const double kmax = std::max(law.kn, law.ks);
-  for (int i = 0; i < nn_; ++i)
+  for (int i = 0; i < nown_; ++i)  // a part: its own nodes (a ghost's mass may lack elements it does not hold)
     if (area[i] > 0 && mass[i] > 0) dt = std::min(dt, 2.0 / std::sqrt(2.0 * kmax * area[i] / mass[i]));
   return dt;
 }
@@ -194,6 +201,8 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
     surf_.eplane = Kokkos::View<double* [D + 1][D + 1]>("fdem::contact::eplane", ne_);
   node_areas<D>(surf_, nn_);
   ns_ = compact_flagged("fdem::contact::surface_nodes", mark_, slaves_, nn_);
+  // a part: its own surface nodes come first (ascending node ids; the own nodes are the first)
+  ns_own_ = part_ ? count_below(slaves_, ns_, nown_) : ns_;
   need_build_ = true;
   ++surface_version_;
 }
@@ -332,11 +341,17 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
 
 template <int D>
 void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
-  if (ni_ > 0 && ++since_check_ >= check_every_) {
+  // (a part polls on the same steps as every other part, with or without interfaces of its own:
+  // the parts agree on what changed there, Simulation::step)
+  polled_ = false;
+  if ((ni_ > 0 || part_) && ++since_check_ >= check_every_) {
     since_check_ = 0;
+    polled_ = true;
     int pending = 0;
-    Kokkos::deep_copy(pending, m.icontact_pending);
-    ++syncs_;
+    if (ni_ > 0) {
+      Kokkos::deep_copy(pending, m.icontact_pending);
+      ++syncs_;
+    }
     if (pending) check_failures(m);
   }
   if (!may_meet_ || ns_ == 0 || na_ == 0) return;
@@ -355,7 +370,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   friction_before_ = fric || !skip_frictionless;
   const auto pass = small_subsets ? (full ? &contact_forces<D, true, 1> : &contact_forces<D, false, 1>)
                                   : (full ? &contact_forces<D, true> : &contact_forces<D, false>);
-  pass(m, slaves_, ns_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
+  pass(m, slaves_, ns_, ns_own_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
   contact_account(pass_, status_, 0.5 * skin);
   --until_recheck_;
 }
@@ -393,7 +408,7 @@ int ContactSystem<D>::active_contacts() const {
 template <int D>
 double ContactSystem<D>::elastic_energy() const {
   if (!may_meet_ || ns_ == 0 || cur_.size == 0) return 0.0;
-  return contact_energy<D>(cur_, slaves_, ns_, law);
+  return contact_energy<D>(cur_, slaves_, ns_own_, law);
 }
 
 template class ContactSystem<2>;

@@ -92,6 +92,15 @@ class ContactSystem {
   // Statistics.
   bool may_meet() const { return may_meet_; }
   int surface_nodes() const { return ns_; }
+  // A part of a decomposed run (the mesh's owned_nodes >= 0; docs/parallel.md "Contact"): the
+  // surface nodes it owns, the first of surface_node_list(). The narrow phase computes the contacts
+  // of these only (each contact once over the parts: its node's owner computes it, and the forces
+  // it puts on ghost nodes go back to their owners); the others are followed for the Verlet test.
+  // On one process: surface_nodes().
+  int own_surface_nodes() const { return ns_own_; }
+  // Whether the last update() looked for failed interfaces (every 25 steps; a part does so on the
+  // same steps as every other part).
+  bool polled() const { return polled_; }
   int active_faces() const { return na_; }
   int candidates() const { return cur_.size; }
   int active_contacts() const;  // in the last pass (reads the device status)
@@ -153,6 +162,9 @@ class ContactSystem {
   static void state_fields(Self& self, F&& f);
 
   int nn_ = 0, ni_ = 0, nf_ = 0, ne_ = 0, nfree_ = 0;
+  bool part_ = false;  // a part of a decomposed run: nodes from nown_ on are ghosts
+  int nown_ = 0, ns_own_ = 0;
+  bool polled_ = false;
   double stable_ = 0;
   ContactSurface<D> surf_;
   PairFilter<D> filter_;

@@ -34,6 +34,9 @@ int count_bodies(const HostMesh& mesh) {
 }
 
 bool contact_wanted(const Case& c, const HostMesh& mesh) {
+  // a part of a decomposed mesh: as its whole mesh, which decompose gave a contact zone if so
+  // (on explicitly without a zone: ContactSystem says what is missing)
+  if (mesh.owned_nodes >= 0) return mesh.pieces >= 0 || c.contact.enabled == 1;
   if (c.contact.enabled >= 0) return c.contact.enabled == 1;
   return mesh.num_ifaces() > 0 || count_bodies(mesh) > 1;
 }
@@ -126,7 +129,9 @@ std::unordered_map<std::array<int, 3>, int, KeyHash> elements_of_faces(const Hos
 template <int D>
 ContactFaces contact_faces(const Case& c, const HostMesh& mesh) {
   const int ni = mesh.num_ifaces();
-  const std::vector<int> bf = boundary_faces(mesh);
+  // a part of a decomposed mesh: the whole mesh's outer faces that it holds (its own boundary
+  // would also have the faces where its ghost layer ends)
+  const std::vector<int> bf = mesh.owned_nodes >= 0 ? mesh.outer_faces : boundary_faces(mesh);
   ContactFaces F;
   const int nbf = F.nb = static_cast<int>(bf.size()) / D;
   F.nf = nbf + 2 * ni;

@@ -302,10 +302,6 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     m.ne_own = mesh.owned_elems;
     m.ni_own = mesh.owned_ifaces;
     m.ne_bulk = mesh.bulk_elems;
-    // contact across parts needs ghost surfaces: not there yet (docs/parallel.md)
-    if (contact_wanted(c, mesh))
-      throw InputError(c.file + ": contact: contact across processes is not available yet (docs/parallel.md); "
-                       "a run over several processes needs \"contact\": {\"enabled\": false}");
   }
   m.thickness = D == 2 ? c.thickness : 1.0;
   m.plane_stress = D == 2 && c.plane_stress;

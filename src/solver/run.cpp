@@ -147,11 +147,18 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     id.mesh_hash = mesh_hash(mesh);
     if (!opt.restart.empty()) check_restart_matches(opt.restart, header, c, mesh, id);
     if (opt.restart.empty()) remove_old_outputs(out);
-    mean_size = mesh_quality(mesh).mean_size;
+    const MeshQuality mq = mesh_quality(mesh);
+    mean_size = mq.mean_size;
+    resolve_defaults(c, mesh);
     setup_times::Phase phase("decomposition");
+    // with contact each part holds the faces within its contact zone: the search distance (the
+    // contact law's penetration depth, ContactSystem::set_law, and the skin) and contact.zone
+    const double reach = contact_wanted(c, mesh) ? 0.25 * (mq.min_size > 0 ? mq.min_size : mq.mean_size) +
+                                                       c.contact.skin + c.contact.zone
+                                                 : 0.0;
     // METIS when the build has it, else coordinate bisection (docs/parallel.md)
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
-    std::vector<SubMesh> all = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size());
+    std::vector<SubMesh> all = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size(), reach);
     for (SubMesh& s : all) {
       parts.push_back(pack_submesh(s));
       s = SubMesh{};  // packed: freed
@@ -167,8 +174,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   }
   comm.min(&mean_size, 1);  // process 0's
   if (root) {
-    resolve_defaults(c, mesh);
-    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");
+    write_file_atomic(out + "/case.json", c.resolved.dump(2) + "\n");  // (defaults resolved above)
   } else {
     resolve_defaults(c, mean_size);  // the same values from the same mean size
     mesh.dim = c.dim;

@@ -46,7 +46,8 @@ void Simulation<D>::step(bool sample) {
     phase += clock.seconds();
     clock.reset();
   };
-  compute_forces<D>(m, scatter_, /*contribute=*/!contact_);
+  // (over several processes contact adds its forces in a pass of its own: contact_over_parts)
+  compute_forces<D>(m, scatter_, /*contribute=*/!contact_ || halo_);
   if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
     m.coh.rescale = 1.0;
     srf_hist_ = srf_;
@@ -55,10 +56,14 @@ void Simulation<D>::step(bool sample) {
   apply_platens<D>(m, t, dt);
   lap(phase_times_.platens);
   if (contact_) {
-    contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
-    Kokkos::Experimental::contribute(m.f, scatter_);
+    if (halo_) {
+      contact_over_parts();
+    } else {
+      contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
+      Kokkos::Experimental::contribute(m.f, scatter_);
+    }
     if (contact_->surface_version() != platen_surface_version_) sync_platen_nodes();
-    if (stable.contact_pending && contact_->may_meet()) apply_contact_step();
+    if (stable.contact_pending && (halo_ ? contact_meet_ : contact_->may_meet())) apply_contact_step();
     lap(phase_times_.contact);
   }
   if (sample_reactions_) sample_reactions();
@@ -204,8 +209,8 @@ template <int D>
 void Simulation<D>::sync_platen_nodes() {
   platen_surface_version_ = contact_->surface_version();
   if (m.platens.count == 0) return;
-  const int ns = contact_->surface_nodes();
-  m.bnode = contact_->surface_node_list();  // its first ns entries
+  const int ns = contact_->own_surface_nodes();  // (a part: the platens act on its own nodes)
+  m.bnode = contact_->surface_node_list();      // its first ns entries
   m.nb = ns;
   grow_platen_areas<D>(m, contact_->surface().narea, ns, t);
 }

@@ -194,6 +194,15 @@ class Simulation {
   void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                     std::vector<double>& stress, std::vector<double>& damage);
   void exchange_ghosts();
+  // Contact over several processes (docs/parallel.md "Contact"): each process computes the contacts
+  // of its own surface nodes against every face it holds (its contact zone); the forces they put on
+  // ghost nodes go back to the owners. contact_meet_: whether surfaces can meet on any process
+  // (agreed on the steps the contact systems poll for failed interfaces, with the check that no
+  // node has moved so far that the zones no longer hold every face a contact may need).
+  void contact_over_parts();
+  void agree_on_contact();
+  bool contact_meet_ = false;
+  double zone_reach_ = 0;  // SubMesh::contact_reach
   // Sums over the processes in place (nothing on one process).
   void sum_over_processes(double* v, int n) const {
     if (comm_) comm_->sum(v, n);

@@ -2,6 +2,9 @@
 // (time step, energy floor, the first exchange), the exchange of the ghost positions after each
 // node update, the gathering of the own fields on process 0 for the snapshots, and the whole run's
 // checkpoint state.
+#include <cmath>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "common/error.hpp"
@@ -14,8 +17,14 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   if (step_count > 0) throw InputError("set_decomposition: the run has started");
   if (part.mesh.num_nodes() != m.nn || part.mesh.num_elems() != m.ne || part.mesh.num_ifaces() != m.ni)
     throw InputError("set_decomposition: the model was not built from this part's mesh");
+  if (contact_ && !(part.contact_reach > contact_->radius))
+    throw InputError("set_decomposition: contact over processes needs a part decomposed with a contact reach "
+                     "beyond the search distance (" + std::to_string(contact_->radius) + " m; got " +
+                     std::to_string(part.contact_reach) + " m)");
   comm_ = std::move(comm);
-  halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv);
+  // with contact the ghosts' velocities travel too (a contact's friction reads the face's)
+  halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv, /*velocities=*/contact_ != nullptr);
+  zone_reach_ = part.contact_reach;
   node_global_ = part.node_global;
   elem_global_ = part.elem_global;
   iface_global_ = part.iface_global;
@@ -33,6 +42,11 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   all.contact = v[3];
   all.platens_on_surfaces = v[4];
   all.bulk_element = -1;
+  if (contact_) {  // surfaces may meet on some process: on all (one time step)
+    double meet = contact_->may_meet() ? -1.0 : 0.0;
+    comm_->min(&meet, 1);
+    all.may_meet = contact_meet_ = meet < 0;
+  }
   agree_time_step(all);
   // the energy floor from the whole body's volume (each element once)
   auto vol = Kokkos::create_mirror_view(m.vol0);
@@ -50,9 +64,79 @@ void Simulation<D>::exchange_ghosts() {
   Kokkos::Timer clock;
   halo_->pack(m);
   fence("fdem::halo: packed");  // MPI reads the buffer
-  comm_->exchange(halo_->neighbours, halo_->send_buf, halo_->send_off, halo_->recv_buf, halo_->recv_off, D);
+  comm_->exchange(halo_->neighbours, halo_->send_buf, halo_->send_off, halo_->recv_buf, halo_->recv_off,
+                  halo_->per);
   halo_->unpack(m);  // runs before the next force pass on the same execution space: no fence
   phase_times_.exchange += clock.seconds();  // pack, MPI and the unpack's launch
+}
+
+// The contact pass of a step over several processes, after the force pass has contributed its
+// forces to m.f: the ghosts' forces zeroed, the contacts of the own surface nodes added through the
+// scatter view, then the forces on the ghosts sent to their owners, which add them (in the order
+// of their neighbours). Every contact is computed once, by its node's owner.
+template <int D>
+void Simulation<D>::contact_over_parts() {
+  const int n0 = m.owned_nodes(), nn = m.nn;
+  const auto f = m.f;
+  Kokkos::parallel_for(
+      "fdem::halo::zero_ghost_forces", Kokkos::RangePolicy<ExecSpace>(n0, nn), KOKKOS_LAMBDA(const int i) {
+        for (int k = 0; k < D; ++k) f(i, k) = 0.0;
+      });
+  scatter_.reset();
+  contact_->update(m, dt, scatter_);
+  Kokkos::Experimental::contribute(m.f, scatter_);
+  Kokkos::Timer clock;
+  halo_->pack_forces(m);
+  fence("fdem::halo: ghost forces packed");  // MPI reads the buffer
+  comm_->exchange(halo_->neighbours, halo_->recv_buf, halo_->recv_off, halo_->send_buf, halo_->send_off, D);
+  halo_->add_forces(m);
+  phase_times_.exchange += clock.seconds();
+  if (contact_->polled()) agree_on_contact();
+}
+
+// On the steps the contact systems poll for failed interfaces (the same on every process): whether
+// surfaces may meet anywhere (the contact time step then applies on all), and the contact zones'
+// check. A process holds every element that came within zone_reach_ of its own nodes at the
+// reference positions; a face it does not hold stays beyond the search distance while
+// 2 (d + 25 v dt) < zone_reach_ - search distance, with d the largest displacement from the
+// reference and v the largest speed of any node (25 steps: to the next check).
+template <int D>
+void Simulation<D>::agree_on_contact() {
+  const int n0 = m.owned_nodes();
+  const auto x = m.x, X = m.X, v = m.v;
+  double d2 = 0, v2 = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::zone_displacement", Kokkos::RangePolicy<ExecSpace>(0, n0),
+      KOKKOS_LAMBDA(const int i, double& mx) {
+        double a = 0;
+        for (int k = 0; k < D; ++k) a += (x(i, k) - X(i, k)) * (x(i, k) - X(i, k));
+        mx = a > mx ? a : mx;
+      },
+      Kokkos::Max<double>(d2));
+  Kokkos::parallel_reduce(
+      "fdem::contact::zone_speed", Kokkos::RangePolicy<ExecSpace>(0, n0),
+      KOKKOS_LAMBDA(const int i, double& mx) {
+        double a = 0;
+        for (int k = 0; k < D; ++k) a += v(i, k) * v(i, k);
+        mx = a > mx ? a : mx;
+      },
+      Kokkos::Max<double>(v2));
+  double w[3] = {contact_->may_meet() ? -1.0 : 0.0, -std::sqrt(d2), -std::sqrt(v2)};
+  comm_->min(w, 3);  // the largest over the processes
+  contact_meet_ = w[0] < 0;
+  const double d = -w[1], speed = -w[2], room = zone_reach_ - contact_->radius;
+  const double need = 2.0 * (d + 25.0 * speed * dt);
+  if (!(need < room)) {
+    char msg[640];
+    std::snprintf(msg, sizeof msg,
+                  "contact over %d processes: at step %ld (t = %.4g s) nodes have moved up to %.3g m from where "
+                  "the parts were cut, at speeds up to %.3g m/s, and each process's contact zone (contact.zone = "
+                  "%.3g m beyond the search distance) may no longer hold every face its contacts can touch; cutting "
+                  "the parts anew during a run is not available yet (docs/parallel.md): give a larger contact.zone "
+                  "(more ghosts) or run on one process",
+                  comm_->size(), step_count, t, d, speed, room);
+    throw InputError(msg);
+  }
 }
 
 // The own rows of each field gathered on process 0 in the whole mesh's order; empty elsewhere.
@@ -205,6 +289,8 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
 #define FDEM_SIMULATION_PARALLEL(D)                                                            \
   template void Simulation<D>::set_decomposition(std::shared_ptr<const Comm>, const SubMesh&); \
   template void Simulation<D>::exchange_ghosts();                                              \
+  template void Simulation<D>::contact_over_parts();                                           \
+  template void Simulation<D>::agree_on_contact();                                             \
   template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
   template void Simulation<D>::load_state_whole(const StateArrays&);                           \
   template void Simulation<D>::gather_whole(std::vector<double>&, std::vector<double>&,        \

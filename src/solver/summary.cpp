@@ -119,14 +119,45 @@ nlohmann::json checkpoint_report(const RunRecord& r) {
 }
 
 template <int D>
-nlohmann::json contact_report(ContactSystem<D>& ct) {
-  return {{"interfaces_handed_over", ct.handed_over()},
-          {"surface_nodes", ct.surface_nodes()},
-          {"candidate_pairs", ct.candidates()},
-          {"active_contacts", ct.active_contacts()},
-          {"grid_builds", ct.builds()},
-          {"list_updates", ct.list_updates()},
-          {"stable_step_s", ct.stable_step()}};
+nlohmann::json contact_report(ContactSystem<D>& ct, const Simulation<D>& sim) {
+  const Comm* comm = sim.comm();
+  if (!comm)
+    return {{"interfaces_handed_over", ct.handed_over()},
+            {"surface_nodes", ct.surface_nodes()},
+            {"candidate_pairs", ct.candidates()},
+            {"active_contacts", ct.active_contacts()},
+            {"grid_builds", ct.builds()},
+            {"list_updates", ct.list_updates()},
+            {"stable_step_s", ct.stable_step()}};
+  // Over several processes (every process calls this): the whole run's counts, each item counted
+  // by its owner (interfaces handed over: the counted ones; surface nodes and contacts: the own
+  // nodes'), and per process what each holds (candidate pairs, its own and its ghosts') and did.
+  const auto ic = sim.m.icontact;
+  long handed = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::count_handed", Kokkos::RangePolicy<ExecSpace>(0, sim.m.owned_ifaces()),
+      KOKKOS_LAMBDA(const int q, long& n) { n += ic(q) != 0 ? 1 : 0; }, handed);
+  const int n = comm->size();
+  const std::vector<double> mine = {static_cast<double>(handed), static_cast<double>(ct.own_surface_nodes()),
+                                    static_cast<double>(ct.active_contacts()), static_cast<double>(ct.candidates()),
+                                    static_cast<double>(ct.builds()), static_cast<double>(ct.list_updates())};
+  std::vector<double> all(mine.size() * n, 0.0), sum(mine.size(), 0.0);
+  for (size_t i = 0; i < mine.size(); ++i) {  // (every process gets every value: sums of one-hot rows)
+    std::vector<double> row(n, 0.0);
+    row[comm->rank()] = mine[i];
+    comm->sum(row.data(), n);
+    for (int p = 0; p < n; ++p) {
+      all[i * n + p] = row[p];
+      sum[i] += row[p];
+    }
+  }
+  auto per = [&](size_t i) { return std::vector<double>(all.begin() + i * n, all.begin() + (i + 1) * n); };
+  return {{"interfaces_handed_over", sum[0]},
+          {"surface_nodes", sum[1]},
+          {"active_contacts", sum[2]},
+          {"candidate_pairs", sum[3]},
+          {"stable_step_s", ct.stable_step()},
+          {"per_process", {{"candidate_pairs", per(3)}, {"grid_builds", per(4)}, {"list_updates", per(5)}}}};
 }
 
 }  // namespace
@@ -166,7 +197,7 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   summary["interfaces_damaged"] = last.damaged;
   summary["interfaces_failed"] = last.failed;
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
-  if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct);
+  if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct, sim);
   if (frag) summary["fragments"] = frag->summary(sim);
   summary["results"] = results_report(c, sim, history);
   if (r.checkpoint_every > 0 || r.restart || r.checkpoints_written > 0)
