@@ -27,6 +27,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "io/checkpoint.hpp"
 #include "test_files.hpp"
 
 namespace {
@@ -398,6 +399,48 @@ double largest_gap(const std::vector<std::vector<double>>& a, const std::vector<
     gap = std::max(gap, big > 0 ? d / big : d);
   }
   return gap;
+}
+
+// A run over several processes writes its contacts in whole-mesh numbering ("contact/pairs": each
+// own surface node's pairs that hold a history, with the face's vertices), and a restart on another
+// process count or on one process builds its lists anew from those rows and carries the histories
+// over (ContactSystem::load_state). The same path on one process: the checkpoint above with its own
+// lists taken out restarts from the rows alone. Without the rows' histories the springs and the
+// friction state of the contacts would start from zero, which shows far above the bound; with them
+// the run goes on as the uninterrupted one up to the order in which a rebuilt list adds a node's
+// contacts (bound 1e-9 of each field's largest value, as between two thread counts below).
+TEST(CheckpointRestartContact, PairsInWholeNumberingCarryTheHistories) {
+  const std::string ref = tmpdir("pairs_ref"), out = tmpdir("pairs");
+  ASSERT_EQ(run_uniaxial(ref, 1), 0) << slurp(ref + ".log");
+  ASSERT_EQ(run_uniaxial(out, 1, every(kUniaxialEvery), "FDEM_TEST_CHECKPOINT_KILL=after:4"), 128 + 9)
+      << slurp(out + ".log");
+  const std::string ck = out + "/checkpoint.h5";
+  fdem::CheckpointHeader h;
+  fdem::StateArrays s = fdem::read_checkpoint(ck, h);
+  ASSERT_TRUE(s.has("contact/pairs"));
+  const size_t row = static_cast<size_t>(s.get_int("contact/pair_row"));
+  ASSERT_EQ(row, 4u + 2u * static_cast<size_t>(h.dim));
+  const std::vector<double>& rows = s.array("contact/pairs");
+  ASSERT_EQ(rows.size() % row, 0u);
+  size_t springs = 0;  // rows with a shear spring
+  for (size_t r = 0; r < rows.size() / row; ++r)
+    for (int k = 0; k < h.dim; ++k) springs += rows[r * row + 4 + h.dim + k] != 0.0 ? 1 : 0;
+  EXPECT_GT(springs, 0u);
+  for (const char* name : {"contact/pair_count", "contact/pair_off", "contact/pair_face", "contact/pair_fn",
+                           "contact/pair_ac", "contact/pair_g0", "contact/pair_fs", "contact/xb"}) {
+    ASSERT_TRUE(s.has(name)) << name;
+    s.f64.erase(name);
+    s.i64.erase(name);
+  }
+  fdem::write_checkpoint(ck, h, s);
+  ASSERT_EQ(run_uniaxial(out, 1, "--restart " + ck), 0) << slurp(out + ".log");
+  const Results a = results(ref), b = results(out);
+  ASSERT_EQ(a.frame_names, b.frame_names);
+  EXPECT_EQ(a.summary["steps"], b.summary["steps"]);
+  EXPECT_EQ(a.summary["interfaces_failed"], b.summary["interfaces_failed"]);
+  EXPECT_LE(largest_gap(a.x, b.x), 1e-9) << differ(a, b);
+  EXPECT_LE(largest_gap(a.v, b.v), 1e-9) << differ(a, b);
+  EXPECT_LE(largest_gap(a.damage, b.damage), 1e-9) << differ(a, b);
 }
 
 TEST(CheckpointRestartContact, TwoThreadsRestartMatchesUninterrupted) {

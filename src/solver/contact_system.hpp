@@ -131,8 +131,16 @@ class ContactSystem {
   // Checkpoint: everything that changes during a run (pair lists with their history, positions at
   // the last build, node contact areas, counters), under "contact/". load_state needs the model's
   // interface handover flags (m.icontact) loaded first: it recomputes the surfaces from them.
-  void save_state(StateArrays& s) const;
-  void load_state(const StateArrays& s, const Model<D>& m);
+  // Also "contact/pairs": the pairs of the own surface nodes that hold a history (a spring, a gap
+  // or a force not zero), kPairRow values each: the node's whole-mesh id, its face's vertices'
+  // whole-mesh ids (sorted), fn, ac, g0, fs (ids: local node to whole-mesh id; empty on one
+  // process). A state without the lists themselves ("contact/pair_count": the whole state of a run
+  // over processes restarted on another count, Simulation::load_state_whole) is loaded from those
+  // rows: the pairs of the own nodes whose face this process holds, rebuilt into candidate lists at
+  // the first step, which carries their histories over.
+  static constexpr int kPairRow = 4 + 2 * D;
+  void save_state(StateArrays& s, const std::vector<int>& ids = {}) const;
+  void load_state(const StateArrays& s, const Model<D>& m, const std::vector<int>& ids = {});
 
   // Rebuilds the grid and the candidate lists now (update() does it when a node has moved more
   // than half the skin; public for the tests: the history must survive rebuilds).
@@ -160,6 +168,9 @@ class ContactSystem {
   // list): f(dataset name, View or scalar member).
   template <class Self, class F>
   static void state_fields(Self& self, F&& f);
+  // "contact/pairs" (save_state) and the lists from them (load_state without the lists).
+  std::vector<double> pair_rows(const std::vector<int>& ids) const;
+  void load_pair_rows(const StateArrays& s, const std::vector<int>& ids);
 
   int nn_ = 0, ni_ = 0, nf_ = 0, ne_ = 0, nfree_ = 0;
   bool part_ = false;  // a part of a decomposed run: nodes from nown_ on are ghosts

@@ -1,11 +1,18 @@
 // ContactSystem's checkpoint (solver/contact_system.hpp, save_state and load_state): the pair
 // lists with their history, the build positions, node areas and the counters of the re-check
-// schedule, under "contact/".
+// schedule, under "contact/"; and the pairs with a history in whole-mesh numbering, from which a
+// part of a run over another number of processes (or one process) takes its own.
 #include "solver/contact_system.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <limits>
+#include <map>
+#include <string>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 
 #include "common/error.hpp"
@@ -45,7 +52,124 @@ void ContactSystem<D>::state_fields(Self& self, F&& f) {
 }
 
 template <int D>
-void ContactSystem<D>::save_state(StateArrays& s) const {
+std::vector<double> ContactSystem<D>::pair_rows(const std::vector<int>& ids) const {
+  const int n = cur_.size;
+  const std::pair<int, int> used(0, n);
+  auto off = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), cur_.off);
+  auto face = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.face, used));
+  auto fn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.fn, used));
+  auto ac = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.ac, used));
+  auto g0 = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.g0, used));
+  auto fs = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.fs, used, Kokkos::ALL));
+  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode);
+  auto whole = [&ids](int i) { return static_cast<double>(ids.empty() ? i : ids[static_cast<size_t>(i)]); };
+  std::vector<double> rows;
+  if (off.extent(0) == 0) return rows;  // (no lists yet)
+  for (int i = 0; i < nown_; ++i)
+    for (int j = off(i); j < off(i + 1); ++j) {
+      bool history = fn(j) != 0.0 || ac(j) != 0.0 || g0(j) != 0.0;
+      for (int k = 0; k < D; ++k) history = history || fs(j, k) != 0.0;
+      if (!history) continue;  // (a pair the search finds again starts from nothing)
+      std::array<double, D> key;
+      for (int k = 0; k < D; ++k) key[k] = whole(fnode(face(j), k));
+      std::sort(key.begin(), key.end());
+      rows.push_back(whole(i));
+      rows.insert(rows.end(), key.begin(), key.end());
+      rows.push_back(fn(j));
+      rows.push_back(ac(j));
+      rows.push_back(g0(j));
+      for (int k = 0; k < D; ++k) rows.push_back(fs(j, k));
+    }
+  return rows;
+}
+
+template <int D>
+void ContactSystem<D>::load_pair_rows(const StateArrays& s, const std::vector<int>& ids) {
+  constexpr int W = kPairRow;
+  const std::vector<double>& rows = s.array("contact/pairs");
+  if (rows.size() % W != 0)
+    throw InputError("checkpoint '" + s.file + "': contact/pairs has " + std::to_string(rows.size()) +
+                     " values, not rows of " + std::to_string(W) + " (the file is damaged)");
+  std::unordered_map<long long, int> node;  // whole-mesh id -> own node
+  for (int i = 0; i < nown_; ++i) node.emplace(ids.empty() ? i : ids[static_cast<size_t>(i)], i);
+  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode);
+  std::map<std::array<long long, D>, int> face_of;  // sorted whole-mesh vertex ids -> face
+  for (int f = 0; f < static_cast<int>(fnode.extent(0)); ++f) {
+    std::array<long long, D> key;
+    for (int k = 0; k < D; ++k) key[k] = ids.empty() ? fnode(f, k) : ids[static_cast<size_t>(fnode(f, k))];
+    std::sort(key.begin(), key.end());
+    face_of.emplace(key, f);
+  }
+  Kokkos::View<int*, Kokkos::HostSpace> fowner;
+  if (filter_.use) fowner = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), filter_.fowner);
+  struct Pair {
+    int node, order, face;
+    size_t row;
+  };
+  std::vector<Pair> pairs;
+  long lost = 0;
+  for (size_t r = 0; r < rows.size() / W; ++r) {
+    const double* v = &rows[r * W];
+    bool ok = true;
+    for (int k = 0; k <= D; ++k) ok = ok && v[k] >= 0 && v[k] < 2147483648.0 && v[k] == std::floor(v[k]);
+    if (!ok)
+      throw InputError("checkpoint '" + s.file + "': contact/pairs row " + std::to_string(r) +
+                       " has a node id that is not one (the file is damaged)");
+    const auto n = node.find(static_cast<long long>(v[0]));
+    if (n == node.end()) continue;  // another process's node
+    std::array<long long, D> key;
+    for (int k = 0; k < D; ++k) key[k] = static_cast<long long>(v[1 + k]);
+    const auto f = face_of.find(key);
+    if (f == face_of.end()) {
+      ++lost;
+      continue;
+    }
+    pairs.push_back({n->second, filter_.use ? fowner(f->second) : 0, f->second, r});
+  }
+  if (lost > 0)  // (only when a node moved past the contact zone: the run's zone check stops such a run)
+    std::fprintf(stderr, "fdem: restart: %ld contact histories with faces this process does not hold dropped\n",
+                 lost);
+  // each node's segment in the order of a search (pair_order: owner element, then face)
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return a.node != b.node ? a.node < b.node : (a.order != b.order ? a.order < b.order : a.face < b.face);
+  });
+  for (size_t j = 1; j < pairs.size(); ++j)
+    if (pairs[j].node == pairs[j - 1].node && pairs[j].face == pairs[j - 1].face)
+      throw InputError("checkpoint '" + s.file + "': contact/pairs holds a pair twice (the file is damaged)");
+  const int n = static_cast<int>(pairs.size());
+  reserve_pairs(cur_, std::max(n, 1));
+  cur_.size = n;
+  const std::pair<int, int> used(0, n);
+  auto off = Kokkos::create_mirror_view(cur_.off);
+  auto face = Kokkos::create_mirror_view(Kokkos::subview(cur_.face, used));
+  auto fn = Kokkos::create_mirror_view(Kokkos::subview(cur_.fn, used));
+  auto ac = Kokkos::create_mirror_view(Kokkos::subview(cur_.ac, used));
+  auto g0 = Kokkos::create_mirror_view(Kokkos::subview(cur_.g0, used));
+  auto fs = Kokkos::create_mirror_view(Kokkos::subview(cur_.fs, used, Kokkos::ALL));
+  for (size_t i = 0; i < off.extent(0); ++i) off(i) = 0;
+  for (int j = 0; j < n; ++j) {
+    const double* v = &rows[pairs[j].row * W + 1 + D];
+    ++off(pairs[j].node + 1);
+    face(j) = pairs[j].face;
+    fn(j) = v[0];
+    ac(j) = v[1];
+    g0(j) = v[2];
+    for (int k = 0; k < D; ++k) fs(j, k) = v[3 + k];
+  }
+  for (size_t i = 1; i < off.extent(0); ++i) off(i) += off(i - 1);
+  Kokkos::deep_copy(cur_.off, off);
+  Kokkos::deep_copy(Kokkos::subview(cur_.face, used), face);
+  Kokkos::deep_copy(Kokkos::subview(cur_.fn, used), fn);
+  Kokkos::deep_copy(Kokkos::subview(cur_.ac, used), ac);
+  Kokkos::deep_copy(Kokkos::subview(cur_.g0, used), g0);
+  Kokkos::deep_copy(Kokkos::subview(cur_.fs, used, Kokkos::ALL), fs);
+  // the first update builds the lists at the current positions and carries these histories over
+  need_build_ = true;
+  until_recheck_ = 0;
+}
+
+template <int D>
+void ContactSystem<D>::save_state(StateArrays& s, const std::vector<int>& ids) const {
   auto save = [&s](const char* name, const auto& x) {
     using T = std::decay_t<decltype(x)>;
     if constexpr (Kokkos::is_view<T>::value) {
@@ -74,11 +198,32 @@ void ContactSystem<D>::save_state(StateArrays& s) const {
   // for people reading the file (not read back)
   s.put_int("contact/surface_nodes", ns_);
   s.put_int("contact/active_faces", na_);
+  s.f64["contact/pairs"] = pair_rows(ids);
+  s.put_int("contact/pair_row", kPairRow);
 }
 
 template <int D>
-void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
+void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m, const std::vector<int>& ids) {
   refresh_surfaces(m);  // active faces, clusters, surface nodes from m.icontact
+  if (!s.has("contact/pair_count")) {  // the whole state of a run over processes: the lists from the rows
+    if (s.get_int("contact/pair_row") != kPairRow)
+      throw InputError("checkpoint '" + s.file + "': contact/pair_row is not " + std::to_string(kPairRow) +
+                       " (a checkpoint of a " + std::to_string(D == 2 ? 3 : 2) + "D run?)");
+    may_meet_ = may_meet_ || s.get_int("contact/may_meet") != 0;
+    since_check_ = static_cast<int>(s.get_int("contact/since_check"));
+    builds_ = static_cast<long>(s.get_int("contact/builds"));
+    handed_ = static_cast<long>(s.get_int("contact/handed_over"));
+    updates_ = static_cast<long>(s.get_int("contact/list_updates"));
+    xb_all_ = true;  // (the first update rebuilds)
+    stale_seen_ = 0;
+    ContactStatus st;
+    st.dissipated = s.get("contact/dissipated");
+    auto h = Kokkos::create_mirror_view(status_);
+    h() = st;
+    Kokkos::deep_copy(status_, h);
+    load_pair_rows(s, ids);
+    return;
+  }
   const long long n = s.get_int("contact/pair_count");
   if (n < 0 || n > std::numeric_limits<int>::max())
     throw InputError("checkpoint '" + s.file + "': contact/pair_count out of range");
@@ -133,9 +278,11 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m) {
   Kokkos::deep_copy(status_, h);
 }
 
-#define FDEM_CONTACT_STATE(D)                                     \
-  template void ContactSystem<D>::save_state(StateArrays&) const; \
-  template void ContactSystem<D>::load_state(const StateArrays&, const Model<D>&);
+#define FDEM_CONTACT_STATE(D)                                                             \
+  template void ContactSystem<D>::save_state(StateArrays&, const std::vector<int>&) const; \
+  template void ContactSystem<D>::load_state(const StateArrays&, const Model<D>&, const std::vector<int>&); \
+  template std::vector<double> ContactSystem<D>::pair_rows(const std::vector<int>&) const;              \
+  template void ContactSystem<D>::load_pair_rows(const StateArrays&, const std::vector<int>&);
 FDEM_CONTACT_STATE(2)
 FDEM_CONTACT_STATE(3)
 #undef FDEM_CONTACT_STATE

@@ -4,7 +4,6 @@
 #include <csignal>
 #include <cstdio>
 
-#include "common/error.hpp"
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
 #include "solver/summary.hpp"
@@ -37,15 +36,6 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   }
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
-  if (part && sim_.contact()) {  // the contacts' state over processes is not gathered yet (docs/parallel.md)
-    if (schedule_.checkpoint_every() > 0)
-      throw InputError(c.file + ": " + (opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every") +
-                       ": checkpoints of a run with contact over several processes are not available yet "
-                       "(docs/parallel.md): run without checkpoints, or on one process");
-    if (restart)
-      throw InputError(c.file + ": --restart: a restart with contact over several processes is not available yet "
-                       "(docs/parallel.md): restart on one process");
-  }
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   if (restart && part) sim_.load_state_whole(*restart);  // the whole run's state: this part's rows
   else if (restart) sim_.load_state(*restart);
@@ -175,17 +165,10 @@ nlohmann::json RunLoop<D>::interrupted() {
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
   progress_->done();
   const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
-  // (contact over several processes: no checkpoint yet, see the constructor)
-  const bool can_save = !(sim_.comm() && sim_.contact());
-  if (can_save) save_checkpoint();
+  save_checkpoint();
   snaps_->take(sim_, frag_.get());
   const std::string ck = out_ + "/checkpoint.h5";
-  if (writes_ && !can_save)
-    std::fprintf(stderr,
-                 "fdem: interrupted by %s at step %ld, t = %.6e s; no checkpoint written (a run with contact "
-                 "over several processes cannot write one yet)\n",
-                 name, sim_.step_count, sim_.t);
-  else if (writes_)
+  if (writes_)
     std::fprintf(stderr,
                  "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
                  "run %s --restart %s (and the same --set options%s)\n",

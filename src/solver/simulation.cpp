@@ -459,7 +459,7 @@ void Simulation<D>::save_state(StateArrays& s) const {
   pull_works();
   StateSaver saver(s);
   const_cast<Simulation*>(this)->checkpoint_fields(saver);  // the saver only reads
-  if (contact_) contact_->save_state(s);
+  if (contact_) contact_->save_state(s, node_global_);  // (node_global_: empty on one process)
 }
 
 template <int D>
@@ -478,7 +478,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
     throw InputError("checkpoint '" + s.file + "': time step " + std::to_string(saved_dt) +
                      " s differs from this case's " + std::to_string(dt) + " s");
   }
-  if (contact_ && !s.has("contact/pair_count"))
+  if (contact_ && !s.has("contact/pair_count") && !s.has("contact/pairs"))
     throw InputError("checkpoint '" + s.file + "' has no contact state but this case has contact");
   if (!contact_ && s.has("contact/pair_count"))
     throw InputError("checkpoint '" + s.file + "' has contact state but this case has no contact");
@@ -486,7 +486,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
   checkpoint_fields(loader);
   push_works();
   if (contact_) {
-    contact_->load_state(s, m);
+    contact_->load_state(s, m, node_global_);
     sync_platen_nodes();
     contact_->law.mu = mu0_ / srf_;
     contact_->law.srf = srf_;

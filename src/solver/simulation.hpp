@@ -201,6 +201,11 @@ class Simulation {
   // node has moved so far that the zones no longer hold every face a contact may need).
   void contact_over_parts();
   void agree_on_contact();
+  // Contact in the whole-run checkpoint (simulation_parallel.cpp): each process's own lists and the
+  // pairs with a history in whole-mesh numbering; and what a restart takes of them.
+  void save_contact_whole(const StateArrays& local, StateArrays& whole) const;
+  void load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const;
+  std::vector<double> decomposition_print() const;
   bool contact_meet_ = false;
   double zone_reach_ = 0;  // SubMesh::contact_reach
   // Sums over the processes in place (nothing on one process).

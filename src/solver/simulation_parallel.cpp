@@ -2,8 +2,11 @@
 // (time step, energy floor, the first exchange), the exchange of the ghost positions after each
 // node update, the gathering of the own fields on process 0 for the snapshots, and the whole run's
 // checkpoint state.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -236,6 +239,108 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     whole.f64[kProcessesPrefix + name] = all;
   }
   if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
+  if (contact_) save_contact_whole(local, whole);
+}
+
+// Contact in the whole state: every process's own entries as they are, under "processes/" with
+// their sizes under "processes/sizes/" (a restart on as many processes, cut the same way, takes its
+// own back and goes on to the bit); for a restart on another count (or on one process) the pairs
+// with a history in whole-mesh numbering ("contact/pairs": every process's rows), the counters
+// summed, whether surfaces may meet on any process, and the poll counter (the same on all).
+template <int D>
+void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& whole) const {
+  const bool root = comm_->rank() == 0;
+  std::vector<std::pair<std::string, bool>> names;  // (the same on every process: the same code wrote them)
+  for (const auto& e : local.f64)
+    if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, false);
+  for (const auto& e : local.i64)
+    if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, true);
+  for (const auto& [name, integer] : names) {
+    const std::vector<double> v = entry_values(local, name);
+    std::vector<double> all, sizes;
+    comm_->gather(v, all);
+    comm_->gather({static_cast<double>(v.size())}, sizes);
+    if (!root) continue;
+    whole.f64.erase(name);
+    whole.i64.erase(name);
+    put_entry(whole, name == "contact/pairs" ? name : kProcessesPrefix + name, all, integer);
+    whole.f64[kProcessesPrefix + "sizes/" + name] = sizes;
+  }
+  std::vector<double> cut;
+  comm_->gather(decomposition_print(), cut);
+  if (!root) return;
+  whole.f64[kProcessesPrefix + "contact_parts"] = cut;
+  auto per = [&whole](const char* name) { return entry_values(whole, kProcessesPrefix + name); };
+  auto sum = [&per](const char* name) {
+    double t = 0;
+    for (double v : per(name)) t += v;
+    return t;
+  };
+  for (const char* name : {"contact/builds", "contact/handed_over", "contact/list_updates", "contact/active"})
+    whole.put_int(name, static_cast<long long>(sum(name)));
+  whole.put("contact/dissipated", sum("contact/dissipated"));
+  const std::vector<double> meet = per("contact/may_meet");
+  whole.put_int("contact/may_meet", *std::max_element(meet.begin(), meet.end()) != 0 ? 1 : 0);
+  whole.put_int("contact/since_check", static_cast<long long>(per("contact/since_check").at(0)));
+  whole.put_int("contact/pair_row", ContactSystem<D>::kPairRow);
+}
+
+// What identifies this process's part (its node count, own nodes and a hash of their whole-mesh
+// ids): a restart takes its own contact lists back only when its part is the same.
+template <int D>
+std::vector<double> Simulation<D>::decomposition_print() const {
+  const uint64_t h = fnv1a(node_global_.data(), node_global_.size() * sizeof(int));
+  return {static_cast<double>(m.nn), static_cast<double>(m.owned_nodes()), static_cast<double>(h >> 32),
+          static_cast<double>(h & 0xffffffffu)};
+}
+
+// This process's contact entries from the whole state (load_state_whole): its own as they were
+// where the run had as many processes cut the same way; else (another count, or a single
+// process's checkpoint) the pairs in whole-mesh numbering, from which ContactSystem::load_state
+// takes those of its own nodes (counters: process 0 the sums, the others nothing).
+template <int D>
+void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const {
+  for (auto it = mine.f64.begin(); it != mine.f64.end();)
+    it = it->first.rfind("contact/", 0) == 0 ? mine.f64.erase(it) : std::next(it);
+  for (auto it = mine.i64.begin(); it != mine.i64.end();)
+    it = it->first.rfind("contact/", 0) == 0 ? mine.i64.erase(it) : std::next(it);
+  const std::string parts = kProcessesPrefix + "contact_parts", sizes = kProcessesPrefix + "sizes/";
+  const std::vector<double> print = decomposition_print();
+  const size_t w = print.size(), r = static_cast<size_t>(comm_->rank());
+  const bool same = count == comm_->size() && whole.f64.count(parts) &&
+                    whole.f64.at(parts).size() == w * static_cast<size_t>(count) &&
+                    std::equal(print.begin(), print.end(), whole.f64.at(parts).begin() + r * w);
+  if (same) {
+    for (const auto& e : whole.f64) {
+      if (e.first.rfind(sizes + "contact/", 0) != 0) continue;
+      const std::string name = e.first.substr(sizes.size());
+      const std::string from = name == "contact/pairs" ? name : kProcessesPrefix + name;
+      const std::vector<double> all = entry_values(whole, from);
+      const std::vector<double>& n = e.second;
+      size_t begin = 0;
+      for (size_t p = 0; p < r && p < n.size(); ++p) begin += static_cast<size_t>(n[p]);
+      const size_t len = r < n.size() ? static_cast<size_t>(n[r]) : 0;
+      if (n.size() != static_cast<size_t>(count) || begin + len > all.size())
+        throw InputError("checkpoint '" + whole.file + "': " + e.first + " does not match " + from +
+                         " (the file is damaged)");
+      put_entry(mine, name, std::vector<double>(all.begin() + begin, all.begin() + begin + len),
+                whole.i64.count(from) > 0);
+    }
+    return;
+  }
+  if (!whole.has("contact/pairs"))
+    throw InputError("checkpoint '" + whole.file + "' holds its contacts in one process's numbering only (written "
+                     "before checkpoints with contact over processes): restart it on one process");
+  for (const char* name : {"contact/pairs", "contact/pair_row", "contact/may_meet", "contact/since_check",
+                           "contact/builds", "contact/handed_over", "contact/list_updates", "contact/dissipated"}) {
+    const bool integer = whole.i64.count(name) > 0;
+    std::vector<double> v = entry_values(whole, name);
+    const std::string n = name;
+    if (comm_->rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
+                               n == "contact/dissipated"))
+      std::fill(v.begin(), v.end(), 0.0);
+    put_entry(mine, name, v, integer);
+  }
 }
 
 template <int D>
@@ -282,6 +387,7 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
       std::fill(v.begin(), v.end(), 0.0);
     mine.f64[name] = v;
   }
+  if (contact_) load_contact_whole(whole, count, mine);
   load_state(mine);
   exchange_ghosts();
 }
@@ -292,6 +398,9 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
   template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
+  template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \
+  template void Simulation<D>::load_contact_whole(const StateArrays&, long long, StateArrays&) const; \
+  template std::vector<double> Simulation<D>::decomposition_print() const;                     \
   template void Simulation<D>::load_state_whole(const StateArrays&);                           \
   template void Simulation<D>::gather_whole(std::vector<double>&, std::vector<double>&,        \
                                             std::vector<double>&, std::vector<double>&,        \
