@@ -401,6 +401,17 @@ double largest_gap(const std::vector<std::vector<double>>& a, const std::vector<
   return gap;
 }
 
+// The same frames, steps and failed interfaces, and every field within 1e-9 of its largest value.
+void expect_within_roundoff(const Results& a, const Results& b) {
+  if (differ(a, b).empty()) return;
+  ASSERT_EQ(a.frame_names, b.frame_names);
+  EXPECT_EQ(a.summary["steps"], b.summary["steps"]);
+  EXPECT_EQ(a.summary["interfaces_failed"], b.summary["interfaces_failed"]);
+  EXPECT_LE(largest_gap(a.x, b.x), 1e-9) << differ(a, b);
+  EXPECT_LE(largest_gap(a.v, b.v), 1e-9) << differ(a, b);
+  EXPECT_LE(largest_gap(a.damage, b.damage), 1e-9) << differ(a, b);
+}
+
 // A run over several processes writes its contacts in whole-mesh numbering ("contact/pairs": each
 // own surface node's pairs that hold a history, with the face's vertices), and a restart on another
 // process count or on one process builds its lists anew from those rows and carries the histories
@@ -434,13 +445,7 @@ TEST(CheckpointRestartContact, PairsInWholeNumberingCarryTheHistories) {
   }
   fdem::write_checkpoint(ck, h, s);
   ASSERT_EQ(run_uniaxial(out, 1, "--restart " + ck), 0) << slurp(out + ".log");
-  const Results a = results(ref), b = results(out);
-  ASSERT_EQ(a.frame_names, b.frame_names);
-  EXPECT_EQ(a.summary["steps"], b.summary["steps"]);
-  EXPECT_EQ(a.summary["interfaces_failed"], b.summary["interfaces_failed"]);
-  EXPECT_LE(largest_gap(a.x, b.x), 1e-9) << differ(a, b);
-  EXPECT_LE(largest_gap(a.v, b.v), 1e-9) << differ(a, b);
-  EXPECT_LE(largest_gap(a.damage, b.damage), 1e-9) << differ(a, b);
+  expect_within_roundoff(results(ref), results(out));
 }
 
 TEST(CheckpointRestartContact, TwoThreadsRestartMatchesUninterrupted) {
@@ -448,14 +453,7 @@ TEST(CheckpointRestartContact, TwoThreadsRestartMatchesUninterrupted) {
   ASSERT_EQ(run_uniaxial(a, 2), 0) << slurp(a + ".log");
   ASSERT_EQ(run_uniaxial(b, 2, every(kUniaxialEvery), "FDEM_TEST_CHECKPOINT_KILL=after:4"), 128 + 9);
   ASSERT_EQ(run_uniaxial(b, 2, "--restart " + b + "/checkpoint.h5"), 0) << slurp(b + ".log");
-  const Results ra = results(a), rb = results(b);
-  if (differ(ra, rb).empty()) return;
-  ASSERT_EQ(ra.frame_names, rb.frame_names);
-  EXPECT_EQ(ra.summary["steps"], rb.summary["steps"]);
-  EXPECT_EQ(ra.summary["interfaces_failed"], rb.summary["interfaces_failed"]);
-  EXPECT_LE(largest_gap(ra.x, rb.x), 1e-9) << differ(ra, rb);
-  EXPECT_LE(largest_gap(ra.v, rb.v), 1e-9) << differ(ra, rb);
-  EXPECT_LE(largest_gap(ra.damage, rb.damage), 1e-9) << differ(ra, rb);
+  expect_within_roundoff(results(a), results(b));
 }
 
 // Strength reduction (slope stability): the factor the interface histories were last updated
