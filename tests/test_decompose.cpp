@@ -251,6 +251,78 @@ TEST(Decompose, ContactZoneHoldsEveryElementWithinReach) {
   }
 }
 
+// Cutting the parts anew during a run: the contact zones are taken at the given positions and
+// those travel with the part (SubMesh::cut_x). Moved rigidly, the disc's zones are those at the
+// reference positions; with part 0's elements lifted by ten reaches, every element within reach of
+// a part's own nodes at the lifted positions is held, and the parts hold fewer than at the
+// reference positions (the gap leaves out what was near); and a run's state (a cut sends it to every
+// process) packs and unpacks exactly.
+TEST(Decompose, ContactZonesAtGivenPositions) {
+  HostMesh disc;
+  fast_disc(disc);
+  const int D = disc.dim, parts = 4;
+  const double reach = 2.0 * mesh_quality(disc).mean_size;
+  const std::vector<int> part = partition_elements(disc, parts, PartitionMethod::Rcb);
+  const std::vector<SubMesh> ref = decompose(disc, part, parts, reach);
+  std::vector<double> moved = disc.X;
+  for (size_t i = 0; i < moved.size(); i += D) moved[i] += 3.0;
+  const std::vector<SubMesh> shifted = decompose(disc, part, parts, reach, &moved);
+  for (int p = 0; p < parts; ++p) {
+    EXPECT_TRUE(ref[p].cut_x.empty());
+    EXPECT_EQ(shifted[p].elem_global, ref[p].elem_global);
+    EXPECT_EQ(shifted[p].node_global, ref[p].node_global);
+    EXPECT_EQ(shifted[p].mesh.X, ref[p].mesh.X);  // (the reference positions stay the model's)
+    ASSERT_EQ(shifted[p].cut_x.size(), shifted[p].node_global.size() * D);
+    for (size_t j = 0; j < shifted[p].node_global.size(); ++j)
+      for (int k = 0; k < D; ++k)
+        EXPECT_EQ(shifted[p].cut_x[j * D + k], moved[static_cast<size_t>(shifted[p].node_global[j]) * D + k]);
+    const SubMesh u = unpack_submesh(pack_submesh(shifted[p]));
+    EXPECT_EQ(u.cut_x, shifted[p].cut_x);
+  }
+  // part 0's elements lifted far away: no part holds an element of another in its zone across the gap
+  std::vector<double> lifted = disc.X;
+  std::vector<bool> up(disc.num_nodes(), false);
+  for (int e = 0; e < disc.num_elems(); ++e)
+    if (part[e] == 0)
+      for (int a = 0; a <= D; ++a) up[disc.elems[(D + 1) * e + a]] = true;
+  for (int n = 0; n < disc.num_nodes(); ++n)
+    if (up[n]) lifted[static_cast<size_t>(n) * D + 1] += 10 * reach;
+  const std::vector<SubMesh> apart = decompose(disc, part, parts, reach, &lifted);
+  HostMesh at = disc;
+  at.X = lifted;
+  size_t held = 0, held_ref = 0;
+  for (const SubMesh& s : apart) {
+    const std::set<int> els(s.elem_global.begin(), s.elem_global.end());
+    for (int e = 0; e < disc.num_elems(); ++e) {  // every element within reach at the lifted positions
+      if (part[e] == s.part) continue;
+      double near = 1e300;
+      for (int i = 0; i < s.mesh.owned_nodes; ++i)
+        near = std::min(near, box_distance(at, e, &lifted[static_cast<size_t>(s.node_global[i]) * D]));
+      if (near <= reach) {
+        EXPECT_TRUE(els.count(e)) << "element " << e << " at " << near;
+      }
+    }
+    held += s.elem_global.size();
+    held_ref += ref[s.part].elem_global.size();
+  }
+  EXPECT_LT(held, held_ref);  // the gap leaves out what was near part 0 before
+  const std::vector<double> short_x(disc.X.begin(), disc.X.end() - 1);
+  EXPECT_THROW(decompose(disc, part, parts, reach, &short_x), InputError);
+  StateArrays st;
+  st.f64["model/x"] = moved;
+  st.i64["contact/pair_count"] = {7};
+  st.str["note"] = "a cut";
+  st.file = "(memory)";
+  const StateArrays back = unpack_state(pack_state(st));
+  EXPECT_EQ(back.f64, st.f64);
+  EXPECT_EQ(back.i64, st.i64);
+  EXPECT_EQ(back.str, st.str);
+  EXPECT_EQ(back.file, st.file);
+  std::vector<char> cut = pack_state(st);
+  cut.pop_back();
+  EXPECT_THROW(unpack_state(cut), InputError);
+}
+
 // The forces on ghosts go back to their owners (Halo::pack_forces, add_forces): each own node gets
 // the force every part that holds it as a ghost put there, added to its own.
 TEST(Decompose, GhostForcesGoBackToTheirOwners) {

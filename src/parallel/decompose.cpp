@@ -36,11 +36,12 @@ Rows rows_of(int keys, int count, int per, Key key) {
 }
 
 // For each part, the elements of the other parts that come within `reach` of one of its own nodes
-// (the distance from the node to the element's bounding box, at the reference positions), each
+// (the distance from the node to the element's bounding box, at the positions X), each
 // list ascending. Nodes binned in a uniform grid of cells at least `reach` and the mean element
 // extent wide (at most about 4 cells per node).
-std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::vector<int>& elem_part,
-                                            const std::vector<int>& owner, int parts, double reach) {
+std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::vector<double>& X,
+                                            const std::vector<int>& elem_part, const std::vector<int>& owner,
+                                            int parts, double reach) {
   const int D = whole.dim, npe = D + 1, nn = whole.num_nodes(), ne = whole.num_elems();
   std::vector<std::vector<int>> zone(parts);
   if (ne == 0 || nn == 0) return zone;
@@ -52,15 +53,15 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
   }
   for (int n = 0; n < nn; ++n)
     for (int k = 0; k < D; ++k) {
-      glo[k] = std::min(glo[k], whole.X[static_cast<size_t>(n) * D + k]);
-      ghi[k] = std::max(ghi[k], whole.X[static_cast<size_t>(n) * D + k]);
+      glo[k] = std::min(glo[k], X[static_cast<size_t>(n) * D + k]);
+      ghi[k] = std::max(ghi[k], X[static_cast<size_t>(n) * D + k]);
     }
   for (int e = 0; e < ne; ++e) {
     double emax = 0;
     for (int k = 0; k < D; ++k) {
       double l = std::numeric_limits<double>::infinity(), h = -l;
       for (int a = 0; a < npe; ++a) {
-        const double x = whole.X[static_cast<size_t>(whole.elems[static_cast<size_t>(e) * npe + a]) * D + k];
+        const double x = X[static_cast<size_t>(whole.elems[static_cast<size_t>(e) * npe + a]) * D + k];
         l = std::min(l, x);
         h = std::max(h, x);
       }
@@ -91,7 +92,7 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
   std::vector<long> key(nn);
   for (int n = 0; n < nn; ++n) {
     long c[3] = {0, 0, 0};
-    for (int k = 0; k < D; ++k) c[k] = coord(whole.X[static_cast<size_t>(n) * D + k], k);
+    for (int k = 0; k < D; ++k) c[k] = coord(X[static_cast<size_t>(n) * D + k], k);
     key[n] = cell_id(c);
     ++start[key[n] + 1];
   }
@@ -121,7 +122,7 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
             if (p == elem_part[e] || stamp[p] == e) continue;
             double d2 = 0;
             for (int k = 0; k < D; ++k) {
-              const double x = whole.X[static_cast<size_t>(n) * D + k];
+              const double x = X[static_cast<size_t>(n) * D + k];
               const double d = x < l[k] ? l[k] - x : (x > h[k] ? x - h[k] : 0.0);
               d2 += d * d;
             }
@@ -138,7 +139,7 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
 }  // namespace
 
 std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
-                               double contact_reach) {
+                               double contact_reach, const std::vector<double>* at) {
   const int D = whole.dim, npe = D + 1, nn = whole.num_nodes(), ne = whole.num_elems(),
             ni = whole.num_ifaces();
   if (parts < 1) throw InputError("decompose: parts must be at least 1 (got " + std::to_string(parts) + ")");
@@ -174,8 +175,12 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
   const bool zoned = contact_reach > 0;
   if (zoned && !std::isfinite(contact_reach))
     throw InputError("decompose: the contact reach must be finite (got " + std::to_string(contact_reach) + ")");
+  if (at && at->size() != whole.X.size())
+    throw InputError("decompose: " + std::to_string(at->size()) + " position values for " +
+                     std::to_string(whole.X.size()));
   const std::vector<std::vector<int>> zones =
-      zoned ? contact_zones(whole, elem_part, owner, parts, contact_reach) : std::vector<std::vector<int>>();
+      zoned ? contact_zones(whole, at ? *at : whole.X, elem_part, owner, parts, contact_reach)
+            : std::vector<std::vector<int>>();
   const std::vector<int> outer = zoned ? boundary_faces(whole) : std::vector<int>();
   std::vector<int> outer_elem(outer.size() / std::max(D, 1), -1);  // the element of each outer face
   for (size_t f = 0; f < outer_elem.size(); ++f) {
@@ -341,6 +346,11 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
       std::sort(local.begin(), local.end());
     }
     s.node_global = nodes;
+    if (at) {
+      s.cut_x.resize(nodes.size() * static_cast<size_t>(D));
+      for (size_t j = 0; j < nodes.size(); ++j)
+        for (int k = 0; k < D; ++k) s.cut_x[j * D + k] = (*at)[static_cast<size_t>(nodes[j]) * D + k];
+    }
     s.elem_global = els;
     s.iface_global = ifs;
     // receive lists by owner (ghosts ascending), and the owners' send lists in the same order
@@ -502,6 +512,7 @@ void submesh_fields(S& s, F&& f) {
   f(m.pieces);
   f(m.whole_min_size);
   f(s.contact_reach);
+  f(s.cut_x);
   f(s.node_global);
   f(s.elem_global);
   f(s.iface_global);
@@ -517,6 +528,26 @@ std::vector<char> pack_submesh(const SubMesh& s) {
   Packer p;
   submesh_fields(s, [&](const auto& v) { p.put(v); });
   return std::move(p.bytes);
+}
+
+std::vector<char> pack_state(const StateArrays& s) {
+  Packer p;
+  p.put(s.f64);
+  p.put(s.i64);
+  p.put(s.str);
+  p.put(s.file);
+  return std::move(p.bytes);
+}
+
+StateArrays unpack_state(const std::vector<char>& bytes) {
+  StateArrays s;
+  Unpacker u(bytes);
+  u.get(s.f64);
+  u.get(s.i64);
+  u.get(s.str);
+  u.get(s.file);
+  if (!u.done()) throw InputError("unpack_state: data left over (damaged)");
+  return s;
 }
 
 SubMesh unpack_submesh(const std::vector<char>& bytes) {

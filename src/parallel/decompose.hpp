@@ -34,6 +34,7 @@
 // owned_* items (HostMesh::owned_*), so that every item is summed by exactly one part.
 #include <vector>
 
+#include "io/checkpoint.hpp"
 #include "mesh/mesh.hpp"
 
 namespace fdem {
@@ -58,6 +59,9 @@ struct SubMesh {
   // comes within this distance of one of its own nodes (at the reference positions) and the
   // interfaces at their nodes, and every ghost is exchanged; 0: no contact zone.
   double contact_reach = 0;
+  // The positions the contact zones were taken at (decompose's `at`: a run's parts cut anew during
+  // the run), D per local node; empty: the reference positions (mesh.X).
+  std::vector<double> cut_x;
   int ghost_nodes() const { return mesh.num_nodes() - mesh.owned_nodes; }
   int ghost_elems() const { return mesh.num_elems() - mesh.owned_elems; }
 };
@@ -66,13 +70,17 @@ struct SubMesh {
 // [0, parts). InputError when elem_part does not have one valid id per element. Deterministic.
 // contact_reach > 0 (a run with contact): each part also holds its contact zone (SubMesh::
 // contact_reach), the whole mesh's outer faces it holds (HostMesh::outer_faces) and the whole
-// mesh's piece count (HostMesh::pieces).
+// mesh's piece count (HostMesh::pieces). at: the positions (as whole.X) to take the contact zones
+// at (null: whole.X), kept in SubMesh::cut_x.
 std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
-                               double contact_reach = 0);
+                               double contact_reach = 0, const std::vector<double>* at = nullptr);
 
 // A part as bytes (for sending it to its process) and back; unpack_submesh throws InputError on
 // data that does not unpack exactly (damaged or cut short).
 std::vector<char> pack_submesh(const SubMesh& s);
 SubMesh unpack_submesh(const std::vector<char>& bytes);
+// The same for a run's state (a re-cut sends the whole state to every process).
+std::vector<char> pack_state(const StateArrays& s);
+StateArrays unpack_state(const std::vector<char>& bytes);
 
 }  // namespace fdem

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 
 #include "common/error.hpp"
@@ -121,6 +122,18 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 namespace {
 
+// Every process's part of `mesh` (decompose), packed for sending.
+std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vector<int>& elem_part, int parts,
+                                            double reach, const std::vector<double>* at) {
+  std::vector<SubMesh> all = decompose(mesh, elem_part, parts, reach, at);
+  std::vector<std::vector<char>> out;
+  for (SubMesh& s : all) {
+    out.push_back(pack_submesh(s));
+    s = SubMesh{};  // packed: freed
+  }
+  return out;
+}
+
 // A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
 // refused, naming the key. Process 0 meshes the case, partitions and decomposes it and sends each
 // process its part (the others never hold the whole mesh); every process runs its part; process 0
@@ -139,6 +152,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   RunIdentity id{case_hash(c), ""};
   double mean_size = std::numeric_limits<double>::infinity();
   std::vector<std::vector<char>> parts;
+  std::unique_ptr<HostMesh> whole;  // process 0, with contact: the whole mesh, to cut the parts anew
+  double whole_reach = 0;
   if (root) {
     ensure_output_dir(out);
     lock = std::make_unique<OutputLock>(out);
@@ -158,10 +173,10 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
                                                  : 0.0;
     // METIS when the build has it, else coordinate bisection (docs/parallel.md)
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
-    std::vector<SubMesh> all = decompose(mesh, partition_elements(mesh, comm.size(), method), comm.size(), reach);
-    for (SubMesh& s : all) {
-      parts.push_back(pack_submesh(s));
-      s = SubMesh{};  // packed: freed
+    parts = packed_parts(mesh, partition_elements(mesh, comm.size(), method), comm.size(), reach, nullptr);
+    if (reach > 0) {
+      whole = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
+      whole_reach = reach;
     }
   }
   // (an error on process 0 above ends every process: the others wait here)
@@ -183,8 +198,50 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   RunOptions o = opt;
   o.progress = opt.progress && root;
   const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
-  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, r, &part)
-                    : run_dim<3>(c, std::move(mesh), out, o, id, r, &part);
+  StateArrays recut;  // the whole state at a cut (Simulation::recut_due)
+  o.recut = &recut;
+  o.restarted = r;
+  for (;;) {
+    nlohmann::json summary = c.dim == 2 ? run_dim<2>(c, std::move(mesh), out, o, id, r, &part)
+                                        : run_dim<3>(c, std::move(mesh), out, o, id, r, &part);
+    if (!summary.contains("recut")) return summary;
+    // Cutting the parts anew: the nodes have moved so far that a contact zone may soon miss a face.
+    // Process 0 partitions the elements by coordinate bisection at the current positions (the
+    // parts follow where the material is now, so each zone stays a thin layer around a compact
+    // region; METIS's graph does not know where fragments have flown), decomposes the whole mesh
+    // with the zones at the current positions and sends each process its part and the whole
+    // state, which each takes its rows of, as from a checkpoint (Simulation::load_state_whole):
+    // elements, nodes, interface and contact histories move to their new owners.
+    ++o.recuts;
+    std::vector<std::vector<char>> states;
+    if (root) {
+      setup_times::Phase phase("decomposition");
+      const std::vector<double>& x = recut.array("model/x", static_cast<long long>(whole->X.size()));
+      std::vector<int> elem_part;
+      {
+        HostMesh moved = *whole;
+        moved.X = x;
+        elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+      }
+      if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
+        for (int& p : elem_part) p = (p + o.recuts) % comm.size();
+      parts = packed_parts(*whole, elem_part, comm.size(), whole_reach, &x);
+      const std::vector<char> bytes = pack_state(recut);
+      states.assign(static_cast<size_t>(comm.size()), bytes);
+      mesh = *whole;
+    } else {
+      mesh = HostMesh{};
+      mesh.dim = c.dim;
+    }
+    std::vector<char> mine;
+    comm.scatter_bytes(parts, mine);
+    part = unpack_submesh(mine);
+    comm.scatter_bytes(states, mine);
+    recut = unpack_state(mine);
+    recut.file = "(the run's state where its parts were cut anew)";
+    if (!root) mesh.bodies = part.mesh.bodies;
+    r = &recut;
+  }
 }
 
 }  // namespace

@@ -11,6 +11,7 @@ namespace fdem {
 
 struct Case;
 struct HostMesh;
+struct StateArrays;
 class Comm;
 
 struct RunOptions {
@@ -29,6 +30,12 @@ struct RunOptions {
   // and process 0 writes the outputs (docs/parallel.md: what such a run does not do yet is refused
   // with the key to change).
   std::shared_ptr<const Comm> comm;
+  // Set by run_case over several processes with contact (solver/run.cpp): where the run loop leaves
+  // the whole state when the parts are to be cut anew (Simulation::recut_due), the cuts so far, and
+  // the checkpoint the run first went on from (null: none).
+  StateArrays* recut = nullptr;
+  int recuts = 0;
+  const StateArrays* restarted = nullptr;
 };
 
 // Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <stdexcept>
 
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
@@ -39,6 +40,7 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   if (restart && part) sim_.load_state_whole(*restart);  // the whole run's state: this part's rows
   else if (restart) sim_.load_state(*restart);
+  if (restart && part && restart == opt.recut) check_recut(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, part ? &part->mesh : nullptr);
   if (restart) {
     restore(*restart, part != nullptr);
@@ -79,7 +81,7 @@ void RunLoop<D>::restore(const StateArrays& r, bool parts) {
 
 template <int D>
 void RunLoop<D>::announce() const {
-  if (!opt_.progress) return;
+  if (!opt_.progress || opt_.recuts > 0) return;  // (said at the start of the run)
   std::fprintf(stderr,
                "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); "
                "%.0f steps to end_time\n",
@@ -103,13 +105,17 @@ nlohmann::json RunLoop<D>::run() {
   if (!restart_) {
     setup_times::Phase outputs("output_setup");
     snaps_->take(sim_, frag_.get());
+  } else if (opt_.progress && opt_.recuts > 0 && restart_ == opt_.recut) {
+    progress_->note("fdem: step " + std::to_string(sim_.step_count) + ": the parts cut anew at the current "
+                    "positions (" + std::to_string(opt_.recuts) + (opt_.recuts == 1 ? " cut" : " cuts") +
+                    " so far)");
   } else if (opt_.progress) {
     std::fprintf(stderr,
                  "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
                  restart_->file.c_str(), sim_.step_count, sim_.t, history_->rows(), snaps_->frames());
   }
   setup_times::finish();
-  if (opt_.progress) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
+  if (opt_.progress && opt_.recuts == 0) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
@@ -133,6 +139,7 @@ nlohmann::json RunLoop<D>::run() {
     if (schedule_.take_snapshot(sim_.t)) snaps_->take(sim_, frag_.get());
     if (schedule_.take_checkpoint(sim_.t)) save_checkpoint();
     progress_->update(sim_.step_count, sim_.t, c_.end_time);
+    if (sim_.recut_due()) return recut();
   }
   const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
@@ -216,16 +223,10 @@ void RunLoop<D>::final_row() {
 }
 
 template <int D>
-void RunLoop<D>::save_checkpoint() {
-  const auto c0 = Clock::now();
-  StateArrays st;
-  if (sim_.comm()) {  // the whole run's state on process 0, which writes the one file
+bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long written) {
+  if (sim_.comm()) {  // the whole run's state on process 0
     sim_.save_state_whole(st);
-    if (!writes_) {
-      ++ckpt_written_;
-      ckpt_wall_ += seconds(Clock::now() - c0);
-      return;
-    }
+    if (!writes_) return false;
   } else {
     sim_.save_state(st);
   }
@@ -237,8 +238,51 @@ void RunLoop<D>::save_checkpoint() {
   s.wall_seconds = prior_wall_ + seconds(c0 - wall0_);
   s.loop_wall_seconds = prior_loop_wall_ + seconds(c0 - loop0_);
   s.checkpoint_seconds = ckpt_wall_;
-  s.checkpoints_written = ckpt_written_ + 1;
+  s.checkpoints_written = written;
   s.save(st);
+  return true;
+}
+
+template <int D>
+nlohmann::json RunLoop<D>::recut() {
+  StateArrays& st = *opt_.recut;
+  st = StateArrays{};
+  collect_state(st, Clock::now(), ckpt_written_);
+  st.f64["recut/mass_momentum"] = sim_.whole_mass_momentum();
+  return {{"recut", true}};
+}
+
+// After a cut (every cut: the check costs one more gather of the state): the new parts hold the
+// state they were given, and the same mass and momentum (summed in another order: to 1e-12 of the
+// mass, and of the sum of m |v_k|).
+template <int D>
+void RunLoop<D>::check_recut(const StateArrays& given) {
+  sim_.check_state_whole(given);
+  std::vector<double> before(5, 0.0);
+  if (writes_) before = given.array("recut/mass_momentum", 5);
+  const std::vector<double> after = sim_.whole_mass_momentum();
+  if (!writes_) return;
+  bool ok = std::fabs(after[0] - before[0]) <= 1e-12 * before[0];
+  for (int k = 1; k < 4; ++k) ok = ok && std::fabs(after[k] - before[k]) <= 1e-12 * before[4];
+  if (!ok) {
+    char msg[320];
+    std::snprintf(msg, sizeof msg,
+                  "internal error: the parts cut anew hold mass %.17g and momentum (%.17g, %.17g, %.17g), "
+                  "not %.17g and (%.17g, %.17g, %.17g)",
+                  after[0], after[1], after[2], after[3], before[0], before[1], before[2], before[3]);
+    throw std::logic_error(msg);
+  }
+}
+
+template <int D>
+void RunLoop<D>::save_checkpoint() {
+  const auto c0 = Clock::now();
+  StateArrays st;
+  if (!collect_state(st, c0, ckpt_written_ + 1)) {  // (process 0 writes the one file)
+    ++ckpt_written_;
+    ckpt_wall_ += seconds(Clock::now() - c0);
+    return;
+  }
   CheckpointHeader h;
   h.dim = D;
   h.nodes = counts_.at("nodes").get<long long>();  // the whole mesh's (over several processes too)
@@ -266,7 +310,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoint_every = schedule_.checkpoint_every();
   r.checkpoint_seconds = ckpt_wall_;
   r.checkpoints_written = ckpt_written_;
-  r.restart = restart_;
+  r.restart = opt_.recuts > 0 ? opt_.restarted : restart_;
   r.signal = signal_;
   nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
   if (const Comm* comm = sim_.comm()) {  // a run over several processes
@@ -277,6 +321,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     std::vector<double> peaks;  // every process's peak resident memory, on process 0
     comm->gather({setup_times::peak_rss_bytes()}, peaks);
     summary["processes"] = {{"count", comm->size()},
+                            {"contact_recuts", opt_.recuts},
                             {"exchange_bytes_per_step", bytes[0]},
                             {"exchange_bytes_per_step_most", -most[0]},
                             {"exchange_seconds_most", -most[1]},

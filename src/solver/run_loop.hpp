@@ -43,6 +43,13 @@ class RunLoop {
   void history_row();
   void final_row();
   void save_checkpoint();
+  // The whole run's state (simulation and run loop) into st; over several processes on process 0
+  // only (false elsewhere: it holds nothing). written: the checkpoints written with this one.
+  bool collect_state(StateArrays& st, Clock::time_point c0, long written);
+  // The parts are to be cut anew (Simulation::recut_due): the whole state to opt.recut; returns
+  // {"recut": true} instead of a summary (run_case goes on with the new parts).
+  nlohmann::json recut();
+  void check_recut(const StateArrays& given);
   nlohmann::json interrupted();
   // The signal that asks the run to stop (0: none); over several processes the same on each.
   int interrupt_signal() const;

@@ -200,6 +200,23 @@ class Simulation {
   // (agreed on the steps the contact systems poll for failed interfaces, with the check that no
   // node has moved so far that the zones no longer hold every face a contact may need).
   void contact_over_parts();
+ public:
+  // Over several processes with contact: the nodes have moved so far from where the parts were cut
+  // that the contact zones may soon miss a face; the run loop then cuts the parts anew at the
+  // current positions (solver/run.cpp), set on the same step on every process.
+  bool recut_due() const { return recut_due_; }
+  // Over several processes (collective): the mass and momentum summed over every process's own
+  // nodes, and the sum of m |v_k| (the scale of the momentum's round-off): 5 values (a 2D run's
+  // third momentum component 0).
+  std::vector<double> whole_mass_momentum() const;
+  // Over several processes (collective), right after load_state_whole: every node, element and
+  // interface owned by one process, and the whole state gathered again must be `given` (every
+  // node's position and velocity, every interface's history and handover flag, every contact pair
+  // with a history: nothing lost, nothing twice); process 0 throws std::logic_error naming what
+  // differs.
+  void check_state_whole(const StateArrays& given) const;
+
+ private:
   void agree_on_contact();
   // Contact in the whole-run checkpoint (simulation_parallel.cpp): each process's own lists and the
   // pairs with a history in whole-mesh numbering; and what a restart takes of them.
@@ -208,6 +225,12 @@ class Simulation {
   std::vector<double> decomposition_print() const;
   bool contact_meet_ = false;
   double zone_reach_ = 0;  // SubMesh::contact_reach
+  Kokkos::View<double* [D]> xcut_;  // the own nodes' positions where the parts were cut (SubMesh::cut_x)
+  bool recut_due_ = false;
+  // Test hook (tests/mpi/check_runs.py): the environment variable FDEM_TEST_RECUT=N cuts the parts
+  // anew every N steps (at the next zone check), each time with the parts' ids rotated, so that
+  // every element, node and history moves to another process (solver/run.cpp).
+  long test_recut_every_ = 0, next_test_cut_ = -1;
   // Sums over the processes in place (nothing on one process).
   void sum_over_processes(double* v, int n) const {
     if (comm_) comm_->sum(v, n);

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <iterator>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -28,6 +30,18 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   // with contact the ghosts' velocities travel too (a contact's friction reads the face's)
   halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv, /*velocities=*/contact_ != nullptr);
   zone_reach_ = part.contact_reach;
+  if (const char* every = std::getenv("FDEM_TEST_RECUT")) test_recut_every_ = std::atol(every);
+  if (contact_) {  // where the zones were taken: the reference positions, or those of a cut during the run
+    const int own = m.owned_nodes();
+    xcut_ = Kokkos::View<double* [D]>("fdem::contact::cut_positions", own);
+    auto h = Kokkos::create_mirror_view(xcut_);
+    auto X = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.X);
+    if (!part.cut_x.empty() && part.cut_x.size() != static_cast<size_t>(m.nn) * D)
+      throw InputError("set_decomposition: the part's cut positions do not match its nodes");
+    for (int i = 0; i < own; ++i)
+      for (int k = 0; k < D; ++k) h(i, k) = part.cut_x.empty() ? X(i, k) : part.cut_x[static_cast<size_t>(i) * D + k];
+    Kokkos::deep_copy(xcut_, h);
+  }
   node_global_ = part.node_global;
   elem_global_ = part.elem_global;
   iface_global_ = part.iface_global;
@@ -99,14 +113,16 @@ void Simulation<D>::contact_over_parts() {
 
 // On the steps the contact systems poll for failed interfaces (the same on every process): whether
 // surfaces may meet anywhere (the contact time step then applies on all), and the contact zones'
-// check. A process holds every element that came within zone_reach_ of its own nodes at the
-// reference positions; a face it does not hold stays beyond the search distance while
-// 2 (d + 25 v dt) < zone_reach_ - search distance, with d the largest displacement from the
-// reference and v the largest speed of any node (25 steps: to the next check).
+// check. A process holds every element that came within zone_reach_ of its own nodes where the
+// parts were cut; a face it does not hold stays beyond the search distance while
+// 2 (d + 25 v dt) < zone_reach_ - search distance, with d the largest displacement since the cut
+// and v the largest speed of any node (25 steps: to the next check). When that fails the parts
+// are cut anew at the current positions (recut_due_; d is 0 after it), unless the speed alone
+// (2 * 25 v dt) fills the zone: then no cut helps and the run stops, naming contact.zone.
 template <int D>
 void Simulation<D>::agree_on_contact() {
   const int n0 = m.owned_nodes();
-  const auto x = m.x, X = m.X, v = m.v;
+  const auto x = m.x, X = xcut_, v = m.v;
   double d2 = 0, v2 = 0;
   Kokkos::parallel_reduce(
       "fdem::contact::zone_displacement", Kokkos::RangePolicy<ExecSpace>(0, n0),
@@ -128,18 +144,24 @@ void Simulation<D>::agree_on_contact() {
   comm_->min(w, 3);  // the largest over the processes
   contact_meet_ = w[0] < 0;
   const double d = -w[1], speed = -w[2], room = zone_reach_ - contact_->radius;
-  const double need = 2.0 * (d + 25.0 * speed * dt);
-  if (!(need < room)) {
-    char msg[640];
-    std::snprintf(msg, sizeof msg,
-                  "contact over %d processes: at step %ld (t = %.4g s) nodes have moved up to %.3g m from where "
-                  "the parts were cut, at speeds up to %.3g m/s, and each process's contact zone (contact.zone = "
-                  "%.3g m beyond the search distance) may no longer hold every face its contacts can touch; cutting "
-                  "the parts anew during a run is not available yet (docs/parallel.md): give a larger contact.zone "
-                  "(more ghosts) or run on one process",
-                  comm_->size(), step_count, t, d, speed, room);
-    throw InputError(msg);
+  const double ahead = 2.0 * 25.0 * speed * dt, need = 2.0 * d + ahead;
+  if (test_recut_every_ > 0) {  // test hook: cut anew every that many steps (FDEM_TEST_RECUT)
+    if (next_test_cut_ < 0) next_test_cut_ = step_count + test_recut_every_;
+    if (step_count >= next_test_cut_ && ahead < room) recut_due_ = true;
   }
+  if (need < room) return;
+  if (ahead < room) {  // valid again once cut at the current positions
+    recut_due_ = true;
+    return;
+  }
+  char msg[640];
+  std::snprintf(msg, sizeof msg,
+                "contact over %d processes: at step %ld (t = %.4g s) nodes move at up to %.3g m/s, so far within "
+                "the 25 steps between two checks of the contact zones that each process's zone (contact.zone = "
+                "%.3g m beyond the search distance) may miss a face its contacts can touch even right after the "
+                "parts are cut anew: give a larger contact.zone (docs/parallel.md) or run on one process",
+                comm_->size(), step_count, t, speed, room);
+  throw InputError(msg);
 }
 
 // The own rows of each field gathered on process 0 in the whole mesh's order; empty elsewhere.
@@ -392,12 +414,70 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
   exchange_ghosts();
 }
 
+template <int D>
+std::vector<double> Simulation<D>::whole_mass_momentum() const {
+  const int own = m.owned_nodes();
+  const auto mass = m.mass;
+  const auto v = m.v;
+  double s[5] = {0, 0, 0, 0, 0};
+  Kokkos::parallel_reduce(
+      "fdem::recut::mass_momentum", Kokkos::RangePolicy<ExecSpace>(0, own),
+      KOKKOS_LAMBDA(const int i, double& a, double& b, double& c, double& d, double& e) {
+        a += mass(i);
+        b += mass(i) * v(i, 0);
+        c += mass(i) * v(i, 1);
+        if (D == 3) d += mass(i) * v(i, D - 1);
+        for (int k = 0; k < D; ++k) e += mass(i) * (v(i, k) < 0 ? -v(i, k) : v(i, k));
+      },
+      s[0], s[1], s[2], s[3], s[4]);
+  comm_->sum(s, 5);
+  return {s[0], s[1], s[2], s[3], s[4]};
+}
+
+template <int D>
+void Simulation<D>::check_state_whole(const StateArrays& given) const {
+  StateArrays again;
+  save_state_whole(again);
+  // each node, element and interface owned once (a duplicate would also leave one without owner)
+  double owned[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
+                     static_cast<double>(m.owned_ifaces())};
+  comm_->sum(owned, 3);
+  if (comm_->rank() != 0) return;
+  std::string diff;
+  const double whole[3] = {static_cast<double>(whole_nn_), static_cast<double>(whole_ne_),
+                           static_cast<double>(whole_ni_)};
+  const char* what[3] = {"nodes", "elements", "interfaces"};
+  for (int k = 0; k < 3; ++k)
+    if (owned[k] != whole[k])
+      diff += std::string(" ") + what[k] + " owned " + std::to_string(static_cast<long>(owned[k])) + " times for " +
+              std::to_string(static_cast<long>(whole[k]));
+  for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact"})
+    if (given.has(name) && entry_values(given, name) != entry_values(again, name)) diff += std::string(" ") + name;
+  if (contact_) {  // the pairs with a history, in any order
+    const size_t w = ContactSystem<D>::kPairRow;
+    auto rows = [w](const std::vector<double>& v) {
+      std::vector<std::vector<double>> r;
+      for (size_t j = 0; j + w <= v.size(); j += w) r.emplace_back(v.begin() + j, v.begin() + j + w);
+      std::sort(r.begin(), r.end());
+      return r;
+    };
+    const auto a = rows(given.array("contact/pairs")), b = rows(again.array("contact/pairs"));
+    if (a != b)
+      diff += " contact/pairs (" + std::to_string(a.size()) + " pairs with a history given, " +
+              std::to_string(b.size()) + " held)";
+  }
+  if (!diff.empty())
+    throw std::logic_error("internal error: the parts cut anew do not hold the run's state they were given:" + diff);
+}
+
 #define FDEM_SIMULATION_PARALLEL(D)                                                            \
   template void Simulation<D>::set_decomposition(std::shared_ptr<const Comm>, const SubMesh&); \
   template void Simulation<D>::exchange_ghosts();                                              \
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
   template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
+  template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
+  template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \
   template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \
   template void Simulation<D>::load_contact_whole(const StateArrays&, long long, StateArrays&) const; \
   template std::vector<double> Simulation<D>::decomposition_print() const;                     \

@@ -27,9 +27,14 @@ The disc and the impacts run twice: with contact off and with contact on as the 
 (each process computes the contacts of its own surface nodes against the faces of its contact
 zone, the forces on ghosts go back to their owners): the same bounds hold. The fragmenting 3D impact
 and the multi-particle impact run with contact on.
-Then: what such a run does not do yet is refused (exit 2, one message naming the key: a run whose
-nodes move beyond the contact zones), and a run that blows up on every process ends with exit 3 and
-no hang.
+Cutting the parts anew (migration): the 2D impact with a 0.3 mm contact zone (about 30 cuts), with
+the test hook FDEM_TEST_RECUT=100 (a cut every 100 steps with the parts' ids rotated: every element,
+node and history moves to another process at every cut) on 2 and 4 processes, and the fragmenting
+3D impact with a 3 mm zone, against the run on 1 process within the bounds above; fdem checks
+every cut itself (ownership, the state gathered again, mass and momentum; exit 1 otherwise).
+Then: a run whose nodes cross the contact zone faster than any cut can follow ends with exit 2 and
+one message naming contact.zone, and a run that blows up on every process ends with exit 3 and no
+hang.
 """
 import csv
 import json
@@ -123,9 +128,11 @@ def command(fdem, n, case, sets, out, extra=()):
 ENV = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false")
 
 
-def run(fdem, n, case, sets, out, timeout=600, extra=()):
-    return subprocess.run(command(fdem, n, case, sets, out, extra), env=ENV, capture_output=True, text=True,
-                          timeout=timeout)
+def run(fdem, n, case, sets, out, timeout=600, extra=(), env=None):
+    cmd = command(fdem, n, case, sets, out, extra)
+    for name in (env or {}) if n > 1 else ():  # (mpirun passes on what -x names)
+        cmd[1:1] = ["-x", name]
+    return subprocess.run(cmd, env=dict(ENV, **(env or {})), capture_output=True, text=True, timeout=timeout)
 
 
 def same_file(a, b):
@@ -165,6 +172,74 @@ def check_restarts(fdem, name, ck, after_tol=None):
         else:
             compare(f"{name} restarted ({src} -> {n})", cols_main, peak_tol, intact_tol, base,
                     history(os.path.join(out, "history.csv")), n, after_tol)
+
+
+def compare_fragmenting(name, base, got):
+    """The fragmenting 3D impact against the run on 1 process (see FRAGMENTING)."""
+    (h, a), (fh, fa) = base
+    (_, b), (_, fb) = got
+    if len(a) != len(b) or len(fa) != len(fb):
+        check(False, f"{name}: rows {len(b)}, {len(fb)} against {len(a)}, {len(fa)}")
+        return
+    j, k = fh.index("fragments"), fh.index("largest_fraction")
+    dn = max(abs(ra[j] - rb[j]) - max(2.0, 0.02 * ra[j]) for ra, rb in zip(fa, fb))
+    dl = max(abs(ra[k] - rb[k]) for ra, rb in zip(fa, fb))
+    check(dn <= 0 and dl < 1e-3,
+          f"{name}: {fb[-1][j]:.0f} fragments against {fa[-1][j]:.0f}, counts within 2 % in "
+          f"every row, largest fraction within {dl:.1e} (< 1e-3)")
+    for col, tol in (("E_kinetic [J]", 5e-3), ("D_fracture [J]", 5e-3)):
+        c = h.index(col)
+        top = max(abs(r[c]) for r in a)
+        d = max(abs(ra[c] - rb[c]) for ra, rb in zip(a, b)) / top
+        check(d < tol, f"{name}: {col} within {d:.1e} of its largest value (< {tol:g})")
+    for col, tol in (("interfaces_damaged", 0.01), ("interfaces_failed", 0.02)):
+        c = h.index(col)
+        check(abs(a[-1][c] - b[-1][c]) <= tol * a[-1][c] + 1,
+              f"{name}: {col} {b[-1][c]:.0f} against {a[-1][c]:.0f}")
+
+
+def check_recuts(fdem, fragmenting_base):
+    """Cutting the parts anew during a run (docs/parallel.md, "Cutting the parts anew"). At every
+    cut fdem itself checks that the new parts hold the state they were given (every node's position
+    and velocity, every interface's history, every contact pair with a history: exactly) and the
+    same mass and momentum (to 1e-12), and ends with exit 1 otherwise."""
+    case, sets, cols_main, peak_tol, intact_tol = CASES["impact2d+contact"]
+    base = history(os.path.join(WORK, "impact2d+contact-1", "history.csv"))
+    runs = [  # (what, processes, extra settings, environment, fewest cuts)
+        # a 0.3 mm zone: the disc moves that far within about 150 steps (about 30 cuts in 2000 steps)
+        ("a 0.3 mm contact zone", 3, ['contact={"zone": 0.0003}'], None, 10),
+        # the test hook: a cut every 100 steps with the parts' ids rotated, so that every element,
+        # node, interface and contact history moves to another process at every cut
+        ("every element moved every 100 steps", 2, [], {"FDEM_TEST_RECUT": "100"}, 10),
+        ("every element moved every 100 steps", 4, [], {"FDEM_TEST_RECUT": "100"}, 10),
+    ]
+    for what, n, more, env, fewest in runs:
+        name = f"impact2d+contact, {what}"
+        out = os.path.join(WORK, f"recut-{n}-{len(more)}")
+        r = run(fdem, n, case, sets + more, out, env=env)
+        check(r.returncode == 0, f"{name}, {n} processes: exit {r.returncode}")
+        if r.returncode != 0:
+            print(r.stderr[-3000:])
+            continue
+        with open(os.path.join(out, "summary.json")) as f:
+            cuts = json.load(f)["processes"].get("contact_recuts", 0)
+        check(cuts >= fewest, f"{name}, {n} processes: the parts cut anew {cuts} times (>= {fewest})")
+        compare(name, cols_main, peak_tol, intact_tol, base, history(os.path.join(out, "history.csv")), n,
+                AFTER_TOL["impact2d"])
+    # the fragmenting 3D impact with a 3 mm zone: cut anew as its fragments fly
+    out = os.path.join(WORK, "recut-fragmenting")
+    r = run(fdem, 3, FRAGMENTING[0], FRAGMENTING[1] + ['contact={"zone": 0.003}'], out)
+    check(r.returncode == 0, f"fragmenting with a 3 mm contact zone, 3 processes: exit {r.returncode}")
+    if r.returncode == 0:
+        with open(os.path.join(out, "summary.json")) as f:
+            cuts = json.load(f)["processes"].get("contact_recuts", 0)
+        check(cuts >= 2, f"fragmenting with a 3 mm contact zone, 3 processes: the parts cut anew {cuts} times (>= 2)")
+        if fragmenting_base is not None:
+            compare_fragmenting("fragmenting with a 3 mm contact zone, 3 processes", fragmenting_base,
+                                (history(os.path.join(out, "history.csv")),
+                                 history(os.path.join(out, "fragments.csv"))))
+    else:
+        print(r.stderr[-3000:])
 
 
 def history(path):
@@ -311,26 +386,10 @@ def main():
             continue
         if base is None:
             continue
-        (h, a), (fh, fa) = base
-        (_, b), (_, fb) = got
-        if len(a) != len(b) or len(fa) != len(fb):
-            check(False, f"fragmenting, {n} processes: rows {len(b)}, {len(fb)} against {len(a)}, {len(fa)}")
-            continue
-        j, k = fh.index("fragments"), fh.index("largest_fraction")
-        dn = max(abs(ra[j] - rb[j]) - max(2.0, 0.02 * ra[j]) for ra, rb in zip(fa, fb))
-        dl = max(abs(ra[k] - rb[k]) for ra, rb in zip(fa, fb))
-        check(dn <= 0 and dl < 1e-3,
-              f"fragmenting, {n} processes: {fb[-1][j]:.0f} fragments against {fa[-1][j]:.0f}, counts within 2 % in "
-              f"every row, largest fraction within {dl:.1e} (< 1e-3)")
-        for col, tol in (("E_kinetic [J]", 5e-3), ("D_fracture [J]", 5e-3)):
-            c = h.index(col)
-            top = max(abs(r[c]) for r in a)
-            d = max(abs(ra[c] - rb[c]) for ra, rb in zip(a, b)) / top
-            check(d < tol, f"fragmenting, {n} processes: {col} within {d:.1e} of its largest value (< {tol:g})")
-        for col, tol in (("interfaces_damaged", 0.01), ("interfaces_failed", 0.02)):
-            c = h.index(col)
-            check(abs(a[-1][c] - b[-1][c]) <= tol * a[-1][c] + 1,
-                  f"fragmenting, {n} processes: {col} {b[-1][c]:.0f} against {a[-1][c]:.0f}")
+        compare_fragmenting(f"fragmenting, {n} processes", base, got)
+
+    print("cutting the parts anew")
+    check_recuts(fdem, base)
 
     print("several bodies: per-body fragment statistics")
     got = {}
@@ -353,12 +412,13 @@ def main():
               f"({pa.get('broken')} broken, {pb.get('broken')} on 3)")
 
     print("refusals and failures")
-    # the 2D impact with a contact zone of 0.3 mm: its disc moves that far within about 150 steps
-    r = run(fdem, 2, CASES["impact2d+contact"][0], CASES["impact2d+contact"][1] + ['contact={"zone": 0.0003}'],
+    # the 2D impact with a contact zone of 0.01 mm: its nodes cross it within the 25 steps between
+    # two checks even right after a cut
+    r = run(fdem, 2, CASES["impact2d+contact"][0], CASES["impact2d+contact"][1] + ['contact={"zone": 0.00001}'],
             os.path.join(WORK, "zone"), timeout=120)
     said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
     check(r.returncode == 2 and len(said) == 1 and "contact.zone" in said[0],
-          f"nodes moving beyond the contact zones end the run: exit {r.returncode}, {said}")
+          f"nodes faster than any cut can follow end the run: exit {r.returncode}, {said}")
     r = run(fdem, 3, "cases/brazilian_disc/case.json",
             COMMON + ["mesh.element_size=0.006", "parameters.gap=0", "parameters.approach_rate=4",
                       "time.safety_factor=1.9", "damping.local=0", "time.max_steps=5000"],
