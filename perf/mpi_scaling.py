@@ -5,7 +5,7 @@
     perf/mpi_scaling.py --markdown [--out FILE]
 
 FDEM_MPI: fdem built with -DFDEM_ENABLE_MPI=ON (scripts/mpi_check builds build/mpi/fdem). The 3D
-impact with contact off (a run over several processes has no contact yet), N steps (default 1000:
+impact with contact off (the bulk and its exchange; contact over processes: docs/parallel.md), N steps (default 1000:
 the flight and the first impact), one thread per process, the process counts interleaved R times
 (default 3: medians) so that the machine's load falls on all alike:
   strong: element size H (default 2.5 mm, about 21 000 tetrahedra) on every count;

@@ -906,8 +906,8 @@ class Report:
                    "`scripts/mpi_check` makes one)")
             self.w()
             return
-        self.w("The 3D impact with contact off (runs over several processes have no contact yet, "
-               "docs/parallel.md), one thread per process, each process count run three times "
+        self.w("The 3D impact with contact off (the bulk and its exchange; contact over processes, its "
+               "contact zones and the cost of cutting the parts anew: docs/parallel.md), one thread per process, each process count run three times "
                "interleaved (medians). Strong: the same mesh on every count; weak: h = 3 mm / n^(1/3), "
                "about 12 600 tetrahedra per process. **This machine has 2 cores: 3 and 4 processes "
                "oversubscribe it, so their rows show what oversubscription costs, not scaling.** "
