@@ -194,13 +194,16 @@ class Simulation {
   void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                     std::vector<double>& stress, std::vector<double>& damage);
   void exchange_ghosts();
+
+ public:  // (nvcc: a function that holds a device lambda must be public)
   // Contact over several processes (docs/parallel.md "Contact"): each process computes the contacts
   // of its own surface nodes against every face it holds (its contact zone); the forces they put on
   // ghost nodes go back to the owners. contact_meet_: whether surfaces can meet on any process
   // (agreed on the steps the contact systems poll for failed interfaces, with the check that no
-  // node has moved so far that the zones no longer hold every face a contact may need).
+  // node has moved so far that the zones no longer hold every face a contact may need). Called by
+  // step() and on the poll steps only.
   void contact_over_parts();
- public:
+  void agree_on_contact();
   // Over several processes with contact: the nodes have moved so far from where the parts were cut
   // that the contact zones may soon miss a face; the run loop then cuts the parts anew at the
   // current positions (solver/run.cpp), set on the same step on every process.
@@ -217,7 +220,6 @@ class Simulation {
   void check_state_whole(const StateArrays& given) const;
 
  private:
-  void agree_on_contact();
   // Contact in the whole-run checkpoint (simulation_parallel.cpp): each process's own lists and the
   // pairs with a history in whole-mesh numbering; and what a restart takes of them.
   void save_contact_whole(const StateArrays& local, StateArrays& whole) const;
