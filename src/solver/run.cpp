@@ -171,9 +171,23 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     const double reach = contact_wanted(c, mesh) ? 0.25 * (mq.min_size > 0 ? mq.min_size : mq.mean_size) +
                                                        c.contact.skin + c.contact.zone
                                                  : 0.0;
-    // METIS when the build has it, else coordinate bisection (docs/parallel.md)
+    // METIS when the build has it, else coordinate bisection (docs/parallel.md). A restart with
+    // contact cuts its parts where the run last cut them (the checkpoint's processes/cut_x), as
+    // the run did: coordinate bisection there after a cut during the run; so its zones hold as
+    // they did, and on as many processes the parts are the same (the run goes on to the bit)
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
-    parts = packed_parts(mesh, partition_elements(mesh, comm.size(), method), comm.size(), reach, nullptr);
+    const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
+    const std::vector<double>* at =
+        resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;
+    std::vector<int> elem_part;
+    if (resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0) {
+      HostMesh moved = mesh;
+      moved.X = *at;
+      elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+    } else {
+      elem_part = partition_elements(mesh, comm.size(), method);
+    }
+    parts = packed_parts(mesh, elem_part, comm.size(), reach, at);
     if (reach > 0) {
       whole = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
       whole_reach = reach;
@@ -196,6 +210,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     mesh.bodies = part.mesh.bodies;
   }
   RunOptions o = opt;
+  if (restart.has("processes/contact_recuts")) o.recuts = static_cast<int>(restart.get_int("processes/contact_recuts"));
   o.progress = opt.progress && root;
   const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
   StateArrays recut;  // the whole state at a cut (Simulation::recut_due)

@@ -81,7 +81,7 @@ void RunLoop<D>::restore(const StateArrays& r, bool parts) {
 
 template <int D>
 void RunLoop<D>::announce() const {
-  if (!opt_.progress || opt_.recuts > 0) return;  // (said at the start of the run)
+  if (!opt_.progress || (restart_ && restart_ == opt_.recut)) return;  // (a cut: said at the start)
   std::fprintf(stderr,
                "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); "
                "%.0f steps to end_time\n",
@@ -105,7 +105,7 @@ nlohmann::json RunLoop<D>::run() {
   if (!restart_) {
     setup_times::Phase outputs("output_setup");
     snaps_->take(sim_, frag_.get());
-  } else if (opt_.progress && opt_.recuts > 0 && restart_ == opt_.recut) {
+  } else if (opt_.progress && restart_ == opt_.recut) {
     progress_->note("fdem: step " + std::to_string(sim_.step_count) + ": the parts cut anew at the current "
                     "positions (" + std::to_string(opt_.recuts) + (opt_.recuts == 1 ? " cut" : " cuts") +
                     " so far)");
@@ -115,7 +115,7 @@ nlohmann::json RunLoop<D>::run() {
                  restart_->file.c_str(), sim_.step_count, sim_.t, history_->rows(), snaps_->frames());
   }
   setup_times::finish();
-  if (opt_.progress && opt_.recuts == 0) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
+  if (opt_.progress && !(restart_ && restart_ == opt_.recut)) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
@@ -227,6 +227,7 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
   if (sim_.comm()) {  // the whole run's state on process 0
     sim_.save_state_whole(st);
     if (!writes_) return false;
+    st.put_int("processes/contact_recuts", opt_.recuts);  // (how a restart cuts its parts: run.cpp)
   } else {
     sim_.save_state(st);
   }

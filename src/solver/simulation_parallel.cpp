@@ -261,7 +261,16 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     whole.f64[kProcessesPrefix + name] = all;
   }
   if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
-  if (contact_) save_contact_whole(local, whole);
+  if (contact_) {
+    save_contact_whole(local, whole);
+    // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
+    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), xcut_);
+    std::vector<double> own(xc.extent(0) * D);
+    for (size_t i = 0; i < xc.extent(0); ++i)
+      for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);
+    std::vector<double> cut = gather_rows(*comm_, own.data(), xc.extent(0), D, node_global_, whole_nn_);
+    if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
+  }
 }
 
 // Contact in the whole state: every process's own entries as they are, under "processes/" with

@@ -31,7 +31,9 @@ Cutting the parts anew (migration): the 2D impact with a 0.3 mm contact zone (ab
 the test hook FDEM_TEST_RECUT=100 (a cut every 100 steps with the parts' ids rotated: every element,
 node and history moves to another process at every cut) on 2 and 4 processes, and the fragmenting
 3D impact with a 3 mm zone, against the run on 1 process within the bounds above; fdem checks
-every cut itself (ownership, the state gathered again, mass and momentum; exit 1 otherwise).
+every cut itself (ownership, the state gathered again, mass and momentum; exit 1 otherwise). The
+0.3 mm run checkpointed after about 20 cuts and restarted on 3 processes gives history.csv byte for
+byte (its parts are cut where the run last cut them), on 2 within the bounds.
 Then: a run whose nodes cross the contact zone faster than any cut can follow ends with exit 2 and
 one message naming contact.zone, and a run that blows up on every process ends with exit 3 and no
 hang.
@@ -226,6 +228,28 @@ def check_recuts(fdem, fragmenting_base):
         check(cuts >= fewest, f"{name}, {n} processes: the parts cut anew {cuts} times (>= {fewest})")
         compare(name, cols_main, peak_tol, intact_tol, base, history(os.path.join(out, "history.csv")), n,
                 AFTER_TOL["impact2d"])
+    # a checkpoint of the run with the 0.3 mm zone (after about 20 cuts) restarted on 3 processes
+    # (its parts cut where the run last cut them: the same parts, so to the bit) and on 2
+    zone = ['contact={"zone": 0.0003}']
+    ref = os.path.join(WORK, "recut-3-1")
+    ck = os.path.join(WORK, "recut-ck")
+    r = run(fdem, 3, case, sets + zone + ["output.checkpoint_every=6e-5"], ck)
+    check(r.returncode == 0 and same_file(os.path.join(ck, "history.csv"), os.path.join(ref, "history.csv")),
+          f"a 0.3 mm contact zone, checkpointed on 3 processes: exit {r.returncode}, history.csv unchanged")
+    for n in (3, 2):
+        out = os.path.join(WORK, f"recut-restart-{n}")
+        r = run(fdem, n, case, sets + zone, out, extra=["--restart", os.path.join(ck, "checkpoint.h5")])
+        check(r.returncode == 0, f"a 0.3 mm contact zone, checkpoint of 3 processes restarted on {n}: exit {r.returncode}")
+        if r.returncode != 0:
+            print(r.stderr[-3000:])
+            continue
+        if n == 3:
+            check(same_file(os.path.join(out, "history.csv"), os.path.join(ref, "history.csv")),
+                  "a 0.3 mm contact zone, checkpoint of 3 processes restarted on 3: history.csv the same byte for "
+                  "byte as the run that did not stop")
+        else:
+            compare(f"impact2d+contact, a 0.3 mm zone restarted (3 -> {n})", cols_main, peak_tol, intact_tol, base,
+                    history(os.path.join(out, "history.csv")), n, AFTER_TOL["impact2d"])
     # the fragmenting 3D impact with a 3 mm zone: cut anew as its fragments fly
     out = os.path.join(WORK, "recut-fragmenting")
     r = run(fdem, 3, FRAGMENTING[0], FRAGMENTING[1] + ['contact={"zone": 0.003}'], out)
