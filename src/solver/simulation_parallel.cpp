@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "kernels/parts.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
@@ -93,12 +94,7 @@ void Simulation<D>::exchange_ghosts() {
 // of their neighbours). Every contact is computed once, by its node's owner.
 template <int D>
 void Simulation<D>::contact_over_parts() {
-  const int n0 = m.owned_nodes(), nn = m.nn;
-  const auto f = m.f;
-  Kokkos::parallel_for(
-      "fdem::halo::zero_ghost_forces", Kokkos::RangePolicy<ExecSpace>(n0, nn), KOKKOS_LAMBDA(const int i) {
-        for (int k = 0; k < D; ++k) f(i, k) = 0.0;
-      });
+  zero_ghost_forces(m);
   scatter_.reset();
   contact_->update(m, dt, scatter_);
   Kokkos::Experimental::contribute(m.f, scatter_);
@@ -121,25 +117,8 @@ void Simulation<D>::contact_over_parts() {
 // (2 * 25 v dt) fills the zone: then no cut helps and the run stops, naming contact.zone.
 template <int D>
 void Simulation<D>::agree_on_contact() {
-  const int n0 = m.owned_nodes();
-  const auto x = m.x, X = xcut_, v = m.v;
   double d2 = 0, v2 = 0;
-  Kokkos::parallel_reduce(
-      "fdem::contact::zone_displacement", Kokkos::RangePolicy<ExecSpace>(0, n0),
-      KOKKOS_LAMBDA(const int i, double& mx) {
-        double a = 0;
-        for (int k = 0; k < D; ++k) a += (x(i, k) - X(i, k)) * (x(i, k) - X(i, k));
-        mx = a > mx ? a : mx;
-      },
-      Kokkos::Max<double>(d2));
-  Kokkos::parallel_reduce(
-      "fdem::contact::zone_speed", Kokkos::RangePolicy<ExecSpace>(0, n0),
-      KOKKOS_LAMBDA(const int i, double& mx) {
-        double a = 0;
-        for (int k = 0; k < D; ++k) a += v(i, k) * v(i, k);
-        mx = a > mx ? a : mx;
-      },
-      Kokkos::Max<double>(v2));
+  largest_drift(m, xcut_, d2, v2);
   double w[3] = {contact_->may_meet() ? -1.0 : 0.0, -std::sqrt(d2), -std::sqrt(v2)};
   comm_->min(w, 3);  // the largest over the processes
   contact_meet_ = w[0] < 0;
@@ -425,20 +404,8 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
 
 template <int D>
 std::vector<double> Simulation<D>::whole_mass_momentum() const {
-  const int own = m.owned_nodes();
-  const auto mass = m.mass;
-  const auto v = m.v;
-  double s[5] = {0, 0, 0, 0, 0};
-  Kokkos::parallel_reduce(
-      "fdem::recut::mass_momentum", Kokkos::RangePolicy<ExecSpace>(0, own),
-      KOKKOS_LAMBDA(const int i, double& a, double& b, double& c, double& d, double& e) {
-        a += mass(i);
-        b += mass(i) * v(i, 0);
-        c += mass(i) * v(i, 1);
-        if (D == 3) d += mass(i) * v(i, D - 1);
-        for (int k = 0; k < D; ++k) e += mass(i) * (v(i, k) < 0 ? -v(i, k) : v(i, k));
-      },
-      s[0], s[1], s[2], s[3], s[4]);
+  double s[5];
+  mass_momentum(m, s);
   comm_->sum(s, 5);
   return {s[0], s[1], s[2], s[3], s[4]};
 }

@@ -7,6 +7,7 @@
 
 #include "common/kernel_times.hpp"
 #include "common/setup_times.hpp"
+#include "kernels/parts.hpp"
 
 namespace fdem {
 
@@ -132,11 +133,7 @@ nlohmann::json contact_report(ContactSystem<D>& ct, const Simulation<D>& sim) {
   // Over several processes (every process calls this): the whole run's counts, each item counted
   // by its owner (interfaces handed over: the counted ones; surface nodes and contacts: the own
   // nodes'), and per process what each holds (candidate pairs, its own and its ghosts') and did.
-  const auto ic = sim.m.icontact;
-  long handed = 0;
-  Kokkos::parallel_reduce(
-      "fdem::contact::count_handed", Kokkos::RangePolicy<ExecSpace>(0, sim.m.owned_ifaces()),
-      KOKKOS_LAMBDA(const int q, long& n) { n += ic(q) != 0 ? 1 : 0; }, handed);
+  const long handed = count_handed(sim.m.icontact, sim.m.owned_ifaces());
   const int n = comm->size();
   const std::vector<double> mine = {static_cast<double>(handed), static_cast<double>(ct.own_surface_nodes()),
                                     static_cast<double>(ct.active_contacts()), static_cast<double>(ct.candidates()),
