@@ -4,6 +4,7 @@
 // of every pair that stays.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <utility>
@@ -206,3 +207,56 @@ TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets2D) { narrow_pha
 TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets3D) { narrow_phase_exact_test<3>(); }
 
 }  // namespace
+
+// The narrow phase's ranges of equal work on host threads (BalancedPoints,
+// kernels/contact/narrow_phase.hpp): every point in exactly one range, each range's work within
+// one point's work of an equal share, also when all the work sits in a few points at the end (as
+// where a body fragments) and when there are more ranges than threads.
+struct VisitCount {
+  Kokkos::View<int*> seen;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& s) const {
+    Kokkos::atomic_add(&seen(i), 1);
+    s.active += 1.0;
+  }
+};
+
+TEST(ContactLists, NarrowPhaseRangesOfEqualWorkCoverEveryPointOnce) {
+  for (const int np : {1, 7, 1000, 4099})
+    for (const bool skewed : {false, true})
+      for (const int nt : {1, 2, 3, 8}) {
+        std::vector<int> w(np);
+        for (int i = 0; i < np; ++i)
+          w[i] = skewed ? (i >= np - np / 10 - 1 ? 40 + i % 13 : 1) : 1 + (i * 7919) % 37;
+        Kokkos::View<int*> work("work", np + 1);
+        auto hw = Kokkos::create_mirror_view(work);
+        long long total = 0;
+        int wmax = 0;
+        for (int i = 0; i < np; ++i) {
+          hw(i) = static_cast<int>(total);
+          total += w[i];
+          wmax = std::max(wmax, w[i]);
+        }
+        hw(np) = static_cast<int>(total);
+        Kokkos::deep_copy(work, hw);
+        VisitCount fn{Kokkos::View<int*>("seen", np)};
+        const BalancedPoints<VisitCount> bp{fn, work, np, nt};
+        ContactSums sums;
+        Kokkos::parallel_reduce(Kokkos::RangePolicy<ExecSpace>(0, nt), bp, sums);
+        auto seen = fdem_test::host_view(fn.seen);
+        for (int i = 0; i < np; ++i) ASSERT_EQ(seen(i), 1) << "np " << np << " T " << nt << " point " << i;
+        EXPECT_EQ(sums.active, np);
+        // the ranges as the functor cuts them (first_at on the host copy; host backends, where they run)
+        if (!std::is_same<MemSpace, Kokkos::HostSpace>::value) continue;
+        const BalancedPoints<VisitCount> hb{fn, Kokkos::View<int*>(hw.data(), np + 1), np, nt};
+        int prev = 0;
+        for (int t = 0; t < nt; ++t) {
+          const int b = hb.first_at(total * t / nt), e = hb.first_at(total * (t + 1) / nt);
+          EXPECT_EQ(b, prev);
+          long long range_work = 0;
+          for (int i = b; i < e; ++i) range_work += w[i];
+          EXPECT_LE(range_work, total / nt + wmax) << "np " << np << " T " << nt << " range " << t;
+          prev = e;
+        }
+        EXPECT_EQ(prev, np);
+      }
+}

@@ -203,6 +203,12 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   ns_ = compact_flagged("fdem::contact::surface_nodes", mark_, slaves_, nn_);
   // a part: its own surface nodes come first (ascending node ids; the own nodes are the first)
   ns_own_ = part_ ? count_below(slaves_, ns_, nown_) : ns_;
+  // the narrow phase's ranges of equal work on host backends with several threads (grows with the
+  // surfaces, with headroom; kernels/contact/narrow_phase.hpp, BalancedPoints)
+  if (std::is_same<MemSpace, Kokkos::HostSpace>::value && ExecSpace().concurrency() > 1 &&
+      static_cast<int>(scratch_.work.extent(0)) < ns_ + 1)
+    scratch_.work = Kokkos::View<int*>(Kokkos::ViewAllocateWithoutInitializing("fdem::contact::narrow_work"),
+                                       std::min(nn_, 3 * ns_ / 2 + 64) + 1);
   need_build_ = true;
   ++surface_version_;
 }

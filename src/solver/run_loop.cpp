@@ -118,6 +118,9 @@ nlohmann::json RunLoop<D>::run() {
   if (opt_.progress && !(restart_ && restart_ == opt_.recut)) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
+  pace_step0_ = sim_.step_count;
+  pace_t0_ = sim_.t;
+  while (next_tenth_ <= 10 && sim_.t >= 0.1 * next_tenth_ * c_.end_time) ++next_tenth_;  // (a restart)
   while (sim_.t < c_.end_time * (1 - 1e-12)) {
     if (const int sig = interrupt_signal()) {  // a signal (SIGINT, SIGTERM): stop after this step
       signal_ = sig;
@@ -139,6 +142,7 @@ nlohmann::json RunLoop<D>::run() {
     if (schedule_.take_snapshot(sim_.t)) snaps_->take(sim_, frag_.get());
     if (schedule_.take_checkpoint(sim_.t)) save_checkpoint();
     progress_->update(sim_.step_count, sim_.t, c_.end_time);
+    mark_pace();
     if (sim_.recut_due()) return recut();
   }
   const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
@@ -299,6 +303,15 @@ void RunLoop<D>::save_checkpoint() {
 }
 
 template <int D>
+void RunLoop<D>::mark_pace() {
+  // (the last tenth within the loop's own end test: the loop stops at end_time (1 - 1e-12))
+  while (next_tenth_ <= 10 && sim_.t >= (next_tenth_ == 10 ? c_.end_time * (1 - 1e-12) : 0.1 * next_tenth_ * c_.end_time)) {
+    pace_.push_back({next_tenth_, sim_.step_count, seconds(Clock::now() - loop0_)});
+    ++next_tenth_;
+  }
+}
+
+template <int D>
 nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wall) {
   RunRecord r;
   r.out = out_;
@@ -314,6 +327,12 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.restart = opt_.recuts > 0 ? opt_.restarted : restart_;
   r.signal = signal_;
   nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
+  if (!pace_.empty()) {
+    nlohmann::json marks = nlohmann::json::array();
+    for (const PaceMark& p : pace_)
+      marks.push_back({{"fraction", p.tenth / 10.0}, {"step", p.step}, {"loop_seconds", p.loop_seconds}});
+    summary["pace"] = {{"from_step", pace_step0_}, {"from_time", pace_t0_}, {"marks", marks}};
+  }
   if (const Comm* comm = sim_.comm()) {  // a run over several processes
     double bytes[2] = {static_cast<double>(sim_.exchange_bytes()), sim_.phase_times().exchange};
     double most[2] = {-bytes[0], -bytes[1]};

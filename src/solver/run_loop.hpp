@@ -5,6 +5,7 @@
 #include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -80,6 +81,19 @@ class RunLoop {
   int signal_ = 0;  // the signal that stopped the run (0: none)
   bool writes_ = true;  // this process writes the outputs (process 0 of a run over several)
   long whole_ifaces_ = 0;  // the whole mesh's interfaces
+  // the pace of the loop: at each tenth of the end time that this process's loop crosses, the
+  // step and the loop's wall seconds so far (summary.json "pace": how the step rate changes as a
+  // run fragments, docs/performance.md)
+  struct PaceMark {
+    int tenth;
+    long step;
+    double loop_seconds;
+  };
+  std::vector<PaceMark> pace_;
+  int next_tenth_ = 1;
+  long pace_step0_ = 0;
+  double pace_t0_ = 0;
+  void mark_pace();
 };
 
 // run_case's run of a prepared case in dimension D.
