@@ -55,6 +55,25 @@ def table(headers, rows):
     return "\n".join(out)
 
 
+def kernel_phase(name):
+    """The phase of the step a kernel belongs to, by its name (summary.json kernel_times)."""
+    if name.startswith("fdem::contact::forces"):
+        return "contact: narrow phase"
+    if any(name.startswith("fdem::contact::" + p) for p in ("pairs_", "local_", "transfer", "grid", "touched", "save_", "list")):
+        return "contact: candidate lists (full builds and local updates)"
+    if name.startswith("fdem::contact::"):
+        return "contact: face geometry, handovers, other"
+    if name == "fdem::forces":
+        return "force pass (bulk and interfaces)"
+    if "ScatterView" in name:
+        return "scatter of the forces (reduce and reset)"
+    if name.startswith("fdem::nodes"):
+        return "node update"
+    if name.startswith("fdem::platens"):
+        return "platens"
+    return "other (outputs, checks, fragments)"
+
+
 class Report:
     def __init__(self, res, doc, img, quick):
         self.res, self.doc, self.img, self.quick = res, doc, img, quick
@@ -896,6 +915,109 @@ class Report:
                "the contact's arrays, kept for every face that may become a surface, about 0.6 kB).")
         self.w()
 
+    def impact_section(self):
+        """Issue 19 target 2: the default 3D impact over its whole run (perf/run_all step `impact`
+        writes impact_<threads>.json): the step rate per tenth of the end time against the first
+        tenth's, the kernel times by phase."""
+        self.w("## 9b. The 3D impact end to end")
+        self.w()
+        runs = []
+        for path in glob.glob(os.path.join(self.res, "impact_*.json")):
+            d = load(path)
+            if d and len(((d.get("pace") or {}).get("marks") or [])) >= 2:
+                runs.append(d)
+        if not runs:
+            self.w("(missing: impact_<threads>.json with its pace, from `perf/run_all --only impact`)")
+            self.w()
+            return
+        runs.sort(key=lambda d: d.get("run", {}).get("threads", 1))
+        self.w("The target (issue 19): over its whole run the default `cases/particle_impact_3d/case.json` keeps at "
+               "least 0.7 of the step rate of its first 10 % (the rate falls as the sphere fragments and the "
+               "contact surface grows). Pace: `summary.json` `pace`, the loop's wall seconds at each tenth of the "
+               "end time; kernel times: `--kernel-times` (each kernel timed through Kokkos' profiling hooks).")
+        self.w()
+        for d in runs:
+            self.impact_run(d)
+        self.w("What is left above the target and why: `docs/performance-impact.md` section 2 (the narrow phase "
+               "grows with the fragments' surface: every candidate's first test reads one face row; the force "
+               "pass stays the same per step).")
+        self.w()
+
+    def impact_run(self, d):
+        run = d.get("run", {})
+        nt = run.get("threads", 1)
+        marks = d["pace"]["marks"]
+        ne = d["counts"]["elements"]
+        self.w(f"### {nt} thread{'s' if nt != 1 else ''}")
+        self.w()
+        self.w(f"{ne:,} tetrahedra, {d['steps']:,} steps. {run.get('cpu', '?')}; commit {run.get('commit', '?')}, "
+               f"{run.get('date_utc', '?')}; load average at the end of the run "
+               f"{', '.join(f'{x:.2f}' for x in run.get('load_average', []))}. Command: `{run.get('command', '?')}`.")
+        self.w()
+        rows, prev_s, prev_t = [], d["pace"].get("from_step", 0), 0.0
+        first = None
+        tenths = []
+        for m in marks:
+            n, t = m["step"] - prev_s, m["loop_seconds"] - prev_t
+            rate = n / t if t > 0 else float("nan")
+            if first is None:
+                first = rate
+            tenths.append((m["fraction"], rate))
+            rows.append([f"{100 * m['fraction']:.0f} %", f"{n:,}", f"{t:.1f}", f"{rate:.1f}", f"{rate * ne:.3g}",
+                         f"{rate / first:.2f}"])
+            prev_s, prev_t = m["step"], m["loop_seconds"]
+        self.w(table(["tenth ending at", "steps", "seconds", "steps/s", "tetrahedron-steps/s", "of the first tenth"], rows))
+        self.w()
+        whole = (marks[-1]["step"] - d["pace"].get("from_step", 0)) / marks[-1]["loop_seconds"]
+        ratio = whole / first
+        complete = abs(marks[-1]["fraction"] - 1.0) < 1e-9
+        self.w(f"Whole run: {whole:.1f} steps/s ({whole * ne:.3g} tetrahedron-steps/s), **{ratio:.2f} of the first "
+               f"tenth's {first:.1f}**; loop {marks[-1]['loop_seconds']:.1f} s.")
+        self.w()
+        if complete and not self.quick:
+            self.checks.append((f"3D impact, whole run >= 0.7 x first 10 %, {nt} thread(s)", ratio >= 0.7,
+                                f"{ratio:.2f} ({whole:.1f} against {first:.1f} steps/s)"))
+        kt = d.get("kernel_times") or []
+        if kt:
+            tot = sum(k["seconds"] for k in kt)
+            groups = {}
+            for k in kt:
+                groups[kernel_phase(k["name"])] = groups.get(kernel_phase(k["name"]), 0.0) + k["seconds"]
+            steps = max(d.get("steps") or 1, 1)
+            big = {k["name"]: k for k in kt}
+            nar, fp = big.get("fdem::contact::forces [device]"), big.get("fdem::forces")
+            self.w(f"Kernel times by phase of the step (the kernels grouped by name; per step: over all {steps:,} "
+                   "steps)" + (f"; narrow phase {1e3 * nar['seconds'] / nar['calls']:.2f} ms per call against the "
+                              f"force pass's {1e3 * fp['seconds'] / fp['calls']:.2f} ms" if nar and fp else "") + ":")
+            self.w()
+            self.w(table(["phase", "seconds", "ms per step", "share"],
+                         [[n, f"{v:.1f}", f"{1e3 * v / steps:.3f}", f"{100 * v / tot:.1f} %"]
+                          for n, v in sorted(groups.items(), key=lambda kv: -kv[1])]))
+            self.w()
+        c = d.get("contact") or {}
+        if c:
+            self.w(f"Contact at the end: {c.get('surface_nodes', 0):,} surface nodes, {c.get('candidate_pairs', 0):,} "
+                   f"candidate pairs, {c.get('active_contacts', 0):,} in contact; {c.get('grid_builds', 0)} full "
+                   f"builds of the candidate lists, {c.get('list_updates', 0)} local updates, "
+                   f"{c.get('interfaces_handed_over', 0):,} interfaces handed over; "
+                   f"{(d.get('fragments') or {}).get('count', '?')} fragments.")
+            self.w()
+        fig, ax = plt.subplots(figsize=(7, 4))
+        xs = [100 * (f - 0.05) for f, _ in tenths]
+        ax.bar(xs, [r * ne for _, r in tenths], width=8, color="tab:blue", label="per tenth")
+        ax.axhline(0.7 * first * ne, color="tab:red", ls="--", label="0.7 of the first tenth")
+        ax.axhline(whole * ne, color="k", ls=":", label=f"whole run ({ratio:.2f})")
+        ax.set_xlabel("simulated time (% of the end time)")
+        ax.set_ylabel(f"tetrahedron-steps per second ({nt} thread{'s' if nt != 1 else ''})")
+        ax.set_title("3D impact: the step rate as the sphere fragments")
+        ax.legend(fontsize=8)
+        fig.subplots_adjust(bottom=0.25)
+        fig.text(0.01, 0.005, f"{run.get('cpu', '?')}; {run.get('commit', '?')}; {run.get('date_utc', '?')}\n"
+                 f"{run.get('command', '?')}", fontsize=6, va="bottom", ha="left", family="monospace", wrap=True)
+        pth = self.save(fig, f"perf_impact_pace_{nt}.png")
+        self.w(f"![3D impact, {nt} thread(s): rate per tenth]({pth})")
+        self.w()
+
     def mpi_section(self):
         """Issue 20: runs over several processes (perf/mpi_scaling.py writes mpi_scaling.json)."""
         self.w("## 10. Runs over several processes (MPI)")
@@ -1009,6 +1131,7 @@ class Report:
         self.brazil_section()
         self.timestep_section()
         self.setup_section()
+        self.impact_section()
         self.mpi_section()
         body = self.lines[body_start:]
         self.lines = self.lines[:body_start]
