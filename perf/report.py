@@ -136,7 +136,8 @@ class Report:
             ["threads", f"{(self.step or {}).get('threads', '?')} ({m.get('omp', '')})"],
             ["date", m.get("date_utc", "?")],
             ["commit", m.get("commit", "?")],
-        ]))
+        ] + [[f"later: `--only \"{r['only']}\"`", f"{r.get('commit', '?')}, {r.get('date_utc', '?')}, "
+              f"{r.get('cpu_model', '?')}, {r.get('cores', '?')} cores"] for r in m.get("later_runs", [])]))
         self.w()
 
     def throughput(self):
@@ -1018,6 +1019,33 @@ class Report:
         self.w(f"![3D impact, {nt} thread(s): rate per tenth]({pth})")
         self.w()
 
+    def gpuready_section(self):
+        """Issue 19 target 5: the GPU-readiness tests (perf/run_all step `gpuready` writes gpuready.json)."""
+        self.w("## 9c. GPU readiness")
+        self.w()
+        d = load(os.path.join(self.res, "gpuready.json"))
+        if not d or d.get("total") is None:
+            self.w("(missing: gpuready.json, from `perf/run_all --only gpuready`)")
+            self.w()
+            return
+        ok = d["exit_status"] == 0 and d["failed"] == 0
+        self.checks.append(("GPU readiness: an unsampled step asks for no copy, fence or host reduction",
+                            ok, f"{d['total'] - d['failed']} of {d['total']} GpuReady tests pass"))
+        self.w("`tests/test_gpu_ready.cpp` counts, through Kokkos' profiling hooks and fdem's own fence "
+               "counter, every host-device copy, fence and reduction into a host value that a step asks "
+               "for: an unsampled step (contact, its handovers and list updates included) must ask for "
+               "none, so that on a GPU it never waits for the device. "
+               f"`{d['command']}` ({d.get('commit', '?')}, {d.get('date_utc', '?')}): "
+               f"**{d['total'] - d['failed']} of {d['total']} pass**.")
+        self.w()
+        if d.get("tests"):
+            self.w(table(["test", "result"], [[f"`{n}`", r] for n, r in d["tests"]]))
+            self.w()
+        self.w("Whether the tree compiles and links for CUDA is checked by hand (no CUDA Kokkos on the CI "
+               "machine): `docs/cuda.md` records each check, its toolchain and commit. No GPU has run fdem "
+               "yet.")
+        self.w()
+
     def mpi_section(self):
         """Issue 20: runs over several processes (perf/mpi_scaling.py writes mpi_scaling.json)."""
         self.w("## 10. Runs over several processes (MPI)")
@@ -1132,6 +1160,7 @@ class Report:
         self.timestep_section()
         self.setup_section()
         self.impact_section()
+        self.gpuready_section()
         self.mpi_section()
         body = self.lines[body_start:]
         self.lines = self.lines[:body_start]
