@@ -387,7 +387,8 @@ struct ContactForcesFn {
 // counts leave most of the candidates to one thread while the others wait at the end of the pass
 // (the default 3D impact on 2 threads: the narrow phase 1.37 times faster than on one thread with
 // equal counts, docs/performance-impact.md section 2). `work` holds the exclusive prefix sum of
-// the points' work (np + 1 entries, narrow_phase_work). The ranges depend on the candidate lists
+// the points' work (np + 1 entries; ContactSystem::refresh_surfaces sizes it, contact_forces fills it
+// before each pass). The ranges depend on the candidate lists
 // only, and a static range of T items puts item t on thread t: each thread takes the same points
 // at every step in the same order, so a run on T threads repeats itself bit for bit.
 inline constexpr int kPointWork = 2;

@@ -81,9 +81,10 @@ class RunLoop {
   int signal_ = 0;  // the signal that stopped the run (0: none)
   bool writes_ = true;  // this process writes the outputs (process 0 of a run over several)
   long whole_ifaces_ = 0;  // the whole mesh's interfaces
-  // the pace of the loop: at each tenth of the end time that this process's loop crosses, the
-  // step and the loop's wall seconds so far (summary.json "pace": how the step rate changes as a
-  // run fragments, docs/performance.md)
+  // the pace of the loop: at each tenth of the end time that this loop crosses, the step and the
+  // loop's wall seconds so far (summary.json "pace": how the step rate changes as a run fragments,
+  // docs/performance.md section 9b). A restart, or a cut of the parts anew, starts a new loop: its
+  // pace begins there (from_step, from_time).
   struct PaceMark {
     int tenth;
     long step;
