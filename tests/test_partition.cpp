@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -83,6 +84,71 @@ TEST(Partition, LoadImbalanceBelowFivePercent) {
         }
         EXPECT_GE(s.imbalance, 0.0);
       }
+}
+
+// The cut during a run (solver/run.cpp) is weighted by each element's modelled work: the contact
+// work of a node is shared among its elements, and the bisection splits at the weighted median, so
+// with the sphere's lowest tenth of nodes carrying as much contact work as all the elements
+// together, every part's work is within a few elements' work of an equal share although the
+// element counts differ by more than half.
+TEST(Partition, WeightedBisectionBalancesTheWorkNotTheElements) {
+  const HostMesh& m = sphere();
+  const std::vector<double> base = fdem::element_work(m, {});
+  const int nv = m.dim + 1;
+  for (int e = 0; e < 3; ++e) {  // each element's own work: bulk, its nodes, side-A interfaces
+    int side_a = 0;
+    for (int i = 0; i < m.num_ifaces(); ++i) side_a += m.iface_elems[2 * static_cast<size_t>(i)] == e;
+    EXPECT_DOUBLE_EQ(base[e], fdem::WorkModel::element + nv * fdem::WorkModel::node +
+                                  side_a * fdem::WorkModel::interface);
+  }
+  double total = 0, biggest = 0;
+  for (double w : base) total += w;
+  // contact work on the lowest tenth of the nodes (where a falling sphere meets the plate)
+  std::vector<int> order(m.num_nodes());
+  for (int n = 0; n < m.num_nodes(); ++n) order[n] = n;
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return m.X[3 * a + 2] < m.X[3 * b + 2]; });
+  std::vector<double> node_work(m.num_nodes(), 0.0);
+  const int low = m.num_nodes() / 10;
+  for (int k = 0; k < low; ++k) node_work[order[k]] = total / low;
+  const std::vector<double> w = fdem::element_work(m, node_work);
+  double with = 0;
+  for (double x : w) {
+    with += x;
+    biggest = std::max(biggest, x);
+  }
+  EXPECT_NEAR(with, 2 * total, 1e-9 * total);  // every node's work shared out once
+  for (int n : {2, 3, 4, 8}) {
+    const std::vector<int> part = fdem::partition_elements_weighted(m, n, w);
+    std::vector<double> work(n, 0.0);
+    std::vector<long> count(n, 0);
+    for (int e = 0; e < m.num_elems(); ++e) {
+      ASSERT_GE(part[e], 0);
+      ASSERT_LT(part[e], n);
+      work[part[e]] += w[e];
+      ++count[part[e]];
+    }
+    const double share = with / n;
+    for (int p = 0; p < n; ++p) EXPECT_LT(std::fabs(work[p] - share), 3 * biggest) << "n " << n << " part " << p;
+    // unweighted, the same bisection leaves the parts at the bottom with far more than their share
+    // (from 4 parts on: the sphere's first cut may run through the bottom and halve it)
+    const std::vector<int> plain = fdem::partition_elements(m, n, PartitionMethod::Rcb);
+    std::vector<double> plain_work(n, 0.0);
+    for (int e = 0; e < m.num_elems(); ++e) plain_work[plain[e]] += w[e];
+    const double plain_most = *std::max_element(plain_work.begin(), plain_work.end());
+    EXPECT_LE(*std::max_element(work.begin(), work.end()), plain_most + 3 * biggest) << "n " << n;
+    if (n >= 4) {
+      EXPECT_GT(plain_most, 1.3 * share) << "n " << n;
+      const auto [lo, hi] = std::minmax_element(count.begin(), count.end());
+      EXPECT_GT(static_cast<double>(*hi) / *lo, 1.5) << "n " << n << ": the element counts follow the work";
+    }
+  }
+  EXPECT_EQ(fdem::partition_elements_weighted(m, 4, w), fdem::partition_elements_weighted(m, 4, w));
+  std::vector<double> bad = w;
+  bad[7] = 0;
+  EXPECT_THROW(fdem::partition_elements_weighted(m, 2, bad), fdem::InputError);
+  EXPECT_THROW(fdem::partition_elements_weighted(m, 2, std::vector<double>(5, 1.0)), fdem::InputError);
+  EXPECT_THROW(fdem::partition_elements_weighted(m, 0, w), fdem::InputError);
+  EXPECT_THROW(fdem::element_work(m, std::vector<double>(3, 1.0)), fdem::InputError);
 }
 
 TEST(Partition, CutAndGhostCountsMatchBruteForce) {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -94,7 +95,7 @@ std::vector<std::array<double, 3>> centroids(const HostMesh& m) {
 
 // Recursive coordinate bisection (a baseline): split the elements at the weighted median of their
 // centroids along the longest side of their bounding box, in proportion to the parts on each side.
-void rcb(const std::vector<std::array<double, 3>>& c, const std::vector<int>& w, int dim, int* first,
+void rcb(const std::vector<std::array<double, 3>>& c, const std::vector<double>& w, int dim, int* first,
          int* last, int part0, int nparts, std::vector<int>& part) {
   if (nparts == 1) {
     for (int* p = first; p != last; ++p) part[*p] = part0;
@@ -112,9 +113,9 @@ void rcb(const std::vector<std::array<double, 3>>& c, const std::vector<int>& w,
   std::sort(first, last,
             [&](int a, int b) { return c[a][axis] != c[b][axis] ? c[a][axis] < c[b][axis] : a < b; });
   const int left = nparts / 2;
-  long total = 0;
+  double total = 0;  // (integer weights: exact sums)
   for (int* p = first; p != last; ++p) total += w[*p];
-  const double target = static_cast<double>(total) * left / nparts;
+  const double target = total * left / nparts;
   const long n = last - first;
   long cut = 0;
   double acc = 0;
@@ -185,6 +186,45 @@ ElementGraph element_graph(const HostMesh& m) {
   return g;
 }
 
+std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work) {
+  const int ne = mesh.num_elems();
+  if (parts < 1 || parts > ne)
+    throw InputError("partition: " + std::to_string(parts) + " parts is out of range: give an integer in [1, " +
+                     std::to_string(ne) + "] (at most the number of elements)");
+  if (work.size() != static_cast<size_t>(ne))
+    throw InputError("partition: " + std::to_string(work.size()) + " element weights for " + std::to_string(ne) +
+                     " elements");
+  for (double w : work)
+    if (!(w > 0) || !std::isfinite(w)) throw InputError("partition: an element weight is not a positive number");
+  std::vector<int> part(ne, 0);
+  if (parts == 1) return part;
+  std::vector<int> ids(ne);
+  std::iota(ids.begin(), ids.end(), 0);
+  rcb(centroids(mesh), work, mesh.dim, ids.data(), ids.data() + ne, 0, parts, part);
+  return part;
+}
+
+std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>& node_work) {
+  const int ne = mesh.num_elems(), nn = mesh.num_nodes(), nv = mesh.dim + 1;
+  if (!node_work.empty() && node_work.size() != static_cast<size_t>(nn))
+    throw InputError("element_work: " + std::to_string(node_work.size()) + " node values for " +
+                     std::to_string(nn) + " nodes");
+  std::vector<double> w(ne, WorkModel::element + nv * WorkModel::node);
+  for (int i = 0; i < mesh.num_ifaces(); ++i) {
+    const int a = mesh.iface_elems[2 * static_cast<size_t>(i)];
+    if (a >= 0 && a < ne) w[a] += WorkModel::interface;
+  }
+  if (node_work.empty()) return w;
+  std::vector<int> at(nn, 0);  // elements at each node (one where interfaces were inserted)
+  for (int n : mesh.elems) ++at[n];
+  for (int e = 0; e < ne; ++e)
+    for (int k = 0; k < nv; ++k) {
+      const int n = mesh.elems[static_cast<size_t>(e) * nv + k];
+      w[e] += node_work[n] / at[n];  // (at[n] >= 1: n is a node of e)
+    }
+  return w;
+}
+
 void partition_init(PartitionMethod method) {
 #ifdef FDEM_HAVE_ZOLTAN
   if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
@@ -250,7 +290,8 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
     } else if (method == PartitionMethod::Rcb) {
       std::vector<int> ids(ne);
       std::iota(ids.begin(), ids.end(), 0);
-      rcb(centroids(mesh), w, mesh.dim, ids.data(), ids.data() + ne, 0, parts, part);
+      rcb(centroids(mesh), std::vector<double>(w.begin(), w.end()), mesh.dim, ids.data(), ids.data() + ne, 0,
+          parts, part);
     } else {  // Block: contiguous index ranges of equal weight
       const long total = std::accumulate(w.begin(), w.end(), 0L);
       long acc = 0;
