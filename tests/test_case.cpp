@@ -380,6 +380,8 @@ TEST(CaseErrors, OutOfRangeNamesPathValueAndRange) {
       {"/damping/local", 1.0, "damping.local", ">= 0 and < 1"},
       {"/damping/local", -0.1, "damping.local", ">= 0 and < 1"},
       {"/damping/mass_proportional", -1, "damping.mass_proportional", ">= 0"},
+      {"/parallel/rebalance_above", 0, "parallel.rebalance_above", ">= 0.01 and <= 1000"},
+      {"/parallel/rebalance_above", 1e4, "parallel.rebalance_above", ">= 0.01 and <= 1000"},
       {"/time/safety_factor", 0, "time.safety_factor", "> 0 and <= 2"},
       {"/time/safety_factor", 2.5, "time.safety_factor", "> 0 and <= 2"},
       {"/time/end_time", 0, "time.end_time", "> 0"},

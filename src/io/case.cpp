@@ -51,7 +51,7 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
 
   R.keys(doc, "", {"name", "description", "dimension", "parameters", "mesh", "analysis",
                    "materials", "regions", "interface_materials", "fracture", "boundary",
-                   "platens", "contact", "damping", "time", "output"});
+                   "platens", "contact", "damping", "time", "output", "parallel"});
   Case c;
   c.file = source;
   c.dim = static_cast<int>(R.integer(doc, "", "dimension", 2, 3));
@@ -65,6 +65,7 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
   read_platens(doc, c, R);
   read_contact(doc, c, R);
   read_damping(doc, c, R);
+  read_parallel(doc, c, R);
   read_time(doc, c, R);
   read_output(doc, c, R);
   c.resolved = std::move(doc);

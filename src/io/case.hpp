@@ -135,6 +135,10 @@ struct Case {
   std::vector<InitialVelocity> initial_velocities;
   std::vector<PlatenSpec> platens;
   ContactSpec contact;
+  // Over several processes with contact: the parts are cut anew when the most loaded process's
+  // modelled work per step exceeds the mean by more than this fraction (and by more than twice
+  // what it exceeded it by right after the last cut); docs/parallel.md "Rebalancing".
+  double rebalance_above = 0.2;
 
   double local_damping = 0;      // alpha, [0, 1)
   double mass_damping = 0;       // c, 1/s

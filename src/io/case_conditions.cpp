@@ -163,6 +163,14 @@ void read_contact(json& doc, Case& c, const Reader& R) {
   c.contact.zone = R.number(ct, P, "zone", ge(0), 0.0);
 }
 
+// "parallel": what a run over several processes does beyond what one process does
+// (docs/parallel.md, "Rebalancing"); a run on one process reads it and does nothing with it.
+void read_parallel(json& doc, Case& c, const Reader& R) {
+  json& par = R.object(doc, "", "parallel", false);
+  R.keys(par, "parallel", {"rebalance_above"});
+  c.rebalance_above = R.number(par, "parallel", "rebalance_above", between(0.01, false, 1000, false), 0.2);
+}
+
 void read_damping(json& doc, Case& c, const Reader& R) {
   json& dmp = R.object(doc, "", "damping", false);
   R.keys(dmp, "damping", {"local", "mass_proportional", "change"});

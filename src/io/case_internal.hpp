@@ -24,6 +24,7 @@ void read_boundary(json& doc, Case& c, const Reader& R);
 void read_platens(json& doc, Case& c, const Reader& R);
 void read_contact(json& doc, Case& c, const Reader& R);      // after read_interfaces
 void read_damping(json& doc, Case& c, const Reader& R);
+void read_parallel(json& doc, Case& c, const Reader& R);
 void read_time(json& doc, Case& c, const Reader& R);         // after read_platens
 void read_output(json& doc, Case& c, const Reader& R);       // after read_time
 

@@ -103,6 +103,11 @@ class ContactSystem {
   bool polled() const { return polled_; }
   int active_faces() const { return na_; }
   int candidates() const { return cur_.size; }
+  // The narrow phase's work of this process's own surface points, in its units (kPointWork per
+  // point plus the point's candidates; kernels/contact/narrow_phase.hpp), for the balance of a run
+  // over processes (Simulation::agree_on_contact): the sum, and with a non-empty `w` also added per
+  // node, w(node) += units * scale. 0 while no surfaces can meet (no narrow phase runs).
+  double own_point_work(const Kokkos::View<double*>& w = {}, double scale = 1.0) const;
   int active_contacts() const;  // in the last pass (reads the device status)
   long builds() const { return builds_; }
   // Handovers that updated the candidate lists by a local search instead of a rebuild.

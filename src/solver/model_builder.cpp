@@ -321,6 +321,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   Phase interfaces("model_interfaces");
   sc.interfaces = build_interfaces<D>(c, mesh, el.mass, m);
   coh0_ = m.coh;
+  rebalance_above_ = c.rebalance_above;
   build_interface_chunks<D>(mesh, m);
   interfaces.stop();
 

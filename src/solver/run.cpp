@@ -154,6 +154,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   std::vector<std::vector<char>> parts;
   std::unique_ptr<HostMesh> whole;  // process 0, with contact: the whole mesh, to cut the parts anew
   double whole_reach = 0;
+  std::vector<int> elem_part_at_start;  // process 0: the parts this run starts with
   if (root) {
     ensure_output_dir(out);
     lock = std::make_unique<OutputLock>(out);
@@ -181,13 +182,30 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;
     std::vector<int> elem_part;
     if (resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0) {
-      HostMesh moved = mesh;
-      moved.X = *at;
-      elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+      // the parts of the last cut on as many processes (weighted by the work then); else coordinate
+      // bisection at the cut's positions (checkpoints written before 2026-12-04 hold no parts)
+      const long long count = restart.has("processes/count") ? restart.get_int("processes/count") : 1;
+      if (count == comm.size() && restart.i64.count("processes/cut_parts")) {
+        const std::vector<long long>& cp = restart.int_array("processes/cut_parts");
+        if (cp.size() != static_cast<size_t>(mesh.num_elems()))
+          throw InputError("checkpoint '" + opt.restart + "': processes/cut_parts has " + std::to_string(cp.size()) +
+                           " entries, not " + std::to_string(mesh.num_elems()) + " (the file is damaged)");
+        for (long long p : cp) {
+          if (p < 0 || p >= comm.size())
+            throw InputError("checkpoint '" + opt.restart + "': processes/cut_parts holds part " + std::to_string(p) +
+                             " outside [0, " + std::to_string(comm.size() - 1) + "] (the file is damaged)");
+          elem_part.push_back(static_cast<int>(p));
+        }
+      } else {
+        HostMesh moved = mesh;
+        moved.X = *at;
+        elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+      }
     } else {
       elem_part = partition_elements(mesh, comm.size(), method);
     }
     parts = packed_parts(mesh, elem_part, comm.size(), reach, at);
+    elem_part_at_start = std::move(elem_part);
     if (reach > 0) {
       whole = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
       whole_reach = reach;
@@ -211,6 +229,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   }
   RunOptions o = opt;
   if (restart.has("processes/contact_recuts")) o.recuts = static_cast<int>(restart.get_int("processes/contact_recuts"));
+  if (restart.has("processes/rebalances")) o.rebalances = static_cast<int>(restart.get_int("processes/rebalances"));
+  if (root && o.recuts > 0 && restart.has("processes/contact_recuts")) o.cut_parts = elem_part_at_start;
   o.progress = opt.progress && root;
   const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
   StateArrays recut;  // the whole state at a cut (Simulation::recut_due)
@@ -227,19 +247,39 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     // with the zones at the current positions and sends each process its part and the whole
     // state, which each takes its rows of, as from a checkpoint (Simulation::load_state_whole):
     // elements, nodes, interface and contact histories move to their new owners.
+    // The cut is weighted by each element's modelled work of a step (WorkModel: its own and its
+    // nodes' contact work; docs/parallel.md "Rebalancing"), so the parts carry equal work, not
+    // equal element counts, where the contacts gather.
     ++o.recuts;
+    const bool work = summary.value("rebalance", false);
+    const double excess = summary.value("excess", 0.0);
+    o.excess_after_cuts.push_back(summary.value("after_cut", 0.0));
+    o.excess_largest = std::max(o.excess_largest, summary.value("largest", 0.0));
+    o.busy_seconds += summary.value("busy", 0.0);
+    char why[200];
+    if (work) {
+      ++o.rebalances;
+      o.excess_at_rebalances.push_back(excess);
+      std::snprintf(why, sizeof why, "the most loaded process's work was %.0f %% above the mean, "
+                    "parallel.rebalance_above = %.3g", 100.0 * excess, c.rebalance_above);
+    } else {
+      std::snprintf(why, sizeof why, "nodes had moved far into the contact zones");
+    }
+    o.last_cut_reason = why;
     std::vector<std::vector<char>> states;
     if (root) {
       setup_times::Phase phase("decomposition");
       const std::vector<double>& x = recut.array("model/x", static_cast<long long>(whole->X.size()));
+      const std::vector<double>& nw = recut.array("recut/node_work", static_cast<long long>(whole->num_nodes()));
       std::vector<int> elem_part;
       {
         HostMesh moved = *whole;
         moved.X = x;
-        elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+        elem_part = partition_elements_weighted(moved, comm.size(), element_work(moved, nw));
       }
       if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
         for (int& p : elem_part) p = (p + o.recuts) % comm.size();
+      o.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)
       parts = packed_parts(*whole, elem_part, comm.size(), whole_reach, &x);
       const std::vector<char> bytes = pack_state(recut);
       states.assign(static_cast<size_t>(comm.size()), bytes);

@@ -35,6 +35,18 @@ struct RunOptions {
   // the checkpoint the run first went on from (null: none).
   StateArrays* recut = nullptr;
   int recuts = 0;
+  // Of those cuts, the ones the balance asked for (Simulation::rebalance_due), the excess of the
+  // most loaded process's work over the mean that asked for each, and the excess at the first
+  // check after each cut (docs/parallel.md "Rebalancing"); and on process 0 each element's part at
+  // the last cut (a checkpoint holds it: a restart on as many processes cuts its parts the same).
+  int rebalances = 0;
+  std::vector<double> excess_at_rebalances, excess_after_cuts;
+  double excess_largest = 0;
+  std::string last_cut_reason;  // for the progress note of the cut
+  // This process's time in the loop outside the exchange (which includes waiting for the others)
+  // in the parts before the last cut: the measured side of the balance.
+  double busy_seconds = 0;
+  std::vector<int> cut_parts;
   const StateArrays* restarted = nullptr;
 };
 

@@ -41,6 +41,11 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   if (restart && part) sim_.load_state_whole(*restart);  // the whole run's state: this part's rows
   else if (restart) sim_.load_state(*restart);
   if (restart && part && restart == opt.recut) check_recut(*restart);
+  // a checkpoint's balance (the excess after the last cut decides the next rebalance): as it was,
+  // on as many processes (on another count the first check measures it anew)
+  if (restart && part && restart != opt.recut && restart->f64.count("processes/balance") &&
+      restart->has("processes/count") && restart->get_int("processes/count") == opt.comm->size())
+    sim_.restore_balance(restart->array("processes/balance", 2));
   history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, part ? &part->mesh : nullptr);
   if (restart) {
     restore(*restart, part != nullptr);
@@ -108,7 +113,7 @@ nlohmann::json RunLoop<D>::run() {
   } else if (opt_.progress && restart_ == opt_.recut) {
     progress_->note("fdem: step " + std::to_string(sim_.step_count) + ": the parts cut anew at the current "
                     "positions (" + std::to_string(opt_.recuts) + (opt_.recuts == 1 ? " cut" : " cuts") +
-                    " so far)");
+                    " so far; " + opt_.last_cut_reason + ")");
   } else if (opt_.progress) {
     std::fprintf(stderr,
                  "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
@@ -232,6 +237,9 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
     sim_.save_state_whole(st);
     if (!writes_) return false;
     st.put_int("processes/contact_recuts", opt_.recuts);  // (how a restart cuts its parts: run.cpp)
+    st.put_int("processes/rebalances", opt_.rebalances);
+    st.f64["processes/balance"] = {sim_.balance().after_cut, sim_.balance().largest};
+    if (!opt_.cut_parts.empty()) st.i64["processes/cut_parts"].assign(opt_.cut_parts.begin(), opt_.cut_parts.end());
   } else {
     sim_.save_state(st);
   }
@@ -254,7 +262,10 @@ nlohmann::json RunLoop<D>::recut() {
   st = StateArrays{};
   collect_state(st, Clock::now(), ckpt_written_);
   st.f64["recut/mass_momentum"] = sim_.whole_mass_momentum();
-  return {{"recut", true}};
+  st.f64["recut/node_work"] = sim_.node_work_whole();  // (process 0: the weights of the cut)
+  const auto& b = sim_.balance();
+  return {{"recut", true}, {"rebalance", sim_.rebalance_due()}, {"excess", b.excess}, {"after_cut", b.after_cut},
+          {"largest", b.largest}, {"busy", seconds(Clock::now() - loop0_) - sim_.phase_times().exchange}};
 }
 
 // After a cut (every cut: the check costs one more gather of the state): the new parts hold the
@@ -338,15 +349,33 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     double most[2] = {-bytes[0], -bytes[1]};
     comm->sum(bytes, 2);
     comm->min(most, 2);
-    std::vector<double> peaks;  // every process's peak resident memory, on process 0
+    std::vector<double> peaks, busy;  // every process's peak resident memory, on process 0
     comm->gather({setup_times::peak_rss_bytes()}, peaks);
+    // the loop's time outside the exchange (which includes the waits for the others), every cut's
+    // parts included: the measured balance
+    comm->gather({opt_.busy_seconds + seconds(Clock::now() - loop0_) - sim_.phase_times().exchange}, busy);
+    const auto& b = sim_.balance();
+    std::vector<double> after = opt_.excess_after_cuts;
+    if (b.after_cut >= 0) after.push_back(b.after_cut);
     summary["processes"] = {{"count", comm->size()},
                             {"contact_recuts", opt_.recuts},
+                            {"rebalances", opt_.rebalances},
                             {"exchange_bytes_per_step", bytes[0]},
                             {"exchange_bytes_per_step_most", -most[0]},
                             {"exchange_seconds_most", -most[1]},
                             {"gpu_aware_mpi", comm->gpu_aware()},
-                            {"peak_rss_bytes", peaks}};
+                            {"peak_rss_bytes", peaks},
+                            {"busy_seconds", busy}};
+    if (b.after_cut >= 0) {  // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
+      nlohmann::json& p = summary["processes"];
+      p["rebalance_above"] = c_.rebalance_above;
+      p["work_excess"] = b.excess;
+      p["work_excess_largest"] = std::max(b.largest, opt_.excess_largest);
+      p["work_excess_at_rebalances"] = opt_.excess_at_rebalances;
+      p["work_excess_after_cuts"] = after;
+      p["work_ns_per_step_most"] = b.work_most;
+      p["work_ns_per_step_mean"] = b.work_mean;
+    }
   }
   if (writes_) write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   if (writes_) print_run_end(summary, r, sim_.step_count, opt_.progress);

@@ -208,6 +208,30 @@ class Simulation {
   // that the contact zones may soon miss a face; the run loop then cuts the parts anew at the
   // current positions (solver/run.cpp), set on the same step on every process.
   bool recut_due() const { return recut_due_; }
+  // The balance of a run over processes with contact (docs/parallel.md "Rebalancing"), checked on
+  // the same poll steps: each process's modelled work of a step (WorkModel: its bulk elements,
+  // interfaces, own nodes and the narrow phase's work of its own surface points), and how far the
+  // largest exceeds the mean (max / mean - 1). When that excess passes the case's
+  // parallel.rebalance_above and twice the excess at the first check after the last cut, the
+  // parts are cut anew (recut_due(), with rebalance_due()), weighted by the work.
+  struct Balance {
+    double excess = 0;      // at the last check
+    double after_cut = -1;  // at the first check after the last cut (or the start); -1: none yet
+    double largest = 0;     // the largest seen
+    double work_most = 0, work_mean = 0;  // ns per step, at the last check
+  };
+  bool rebalance_due() const { return rebalance_due_; }
+  const Balance& balance() const { return balance_; }
+  void restore_balance(const std::vector<double>& after_cut_largest) {  // (a checkpoint's: RunLoop)
+    balance_.after_cut = after_cut_largest.at(0);
+    balance_.largest = after_cut_largest.at(1);
+  }
+  // This process's modelled work of a step (ns; WorkModel); with a non-empty `node_work` (m.nn
+  // entries) the own surface points' contact work is also added there per node.
+  double modelled_work(const Kokkos::View<double*>& node_work = {}) const;
+  // Over several processes (collective, at a cut): each node's contact work (ns per step) in the
+  // whole mesh's order, on process 0 (empty elsewhere): the weights of the next cut.
+  std::vector<double> node_work_whole() const;
   // Over several processes (collective): the mass and momentum summed over every process's own
   // nodes, and the sum of m |v_k| (the scale of the momentum's round-off): 5 values (a 2D run's
   // third momentum component 0).
@@ -229,6 +253,9 @@ class Simulation {
   double zone_reach_ = 0;  // SubMesh::contact_reach
   Kokkos::View<double* [D]> xcut_;  // the own nodes' positions where the parts were cut (SubMesh::cut_x)
   bool recut_due_ = false;
+  bool rebalance_due_ = false;
+  double rebalance_above_ = 0.2;  // Case::rebalance_above
+  Balance balance_;
   // Test hook (tests/mpi/check_runs.py): the environment variable FDEM_TEST_RECUT=N cuts the parts
   // anew every N steps (at the next zone check), each time with the parts' ids rotated, so that
   // every element, node and history moves to another process (solver/run.cpp).

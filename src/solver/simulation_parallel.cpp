@@ -14,6 +14,7 @@
 
 #include "common/error.hpp"
 #include "kernels/parts.hpp"
+#include "parallel/partition.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
@@ -115,15 +116,38 @@ void Simulation<D>::contact_over_parts() {
 // and v the largest speed of any node (25 steps: to the next check). When that fails the parts
 // are cut anew at the current positions (recut_due_; d is 0 after it), unless the speed alone
 // (2 * 25 v dt) fills the zone: then no cut helps and the run stops, naming contact.zone.
+//
+// The same steps check the balance (Balance): each process's modelled work of a step, its largest
+// and its mean over the processes; when the largest exceeds the mean by more than
+// rebalance_above_ and by more than twice what it did at the first check after the last cut (so a
+// cut that could not do better is not repeated at once), the parts are cut anew, weighted by the
+// work (rebalance_due_; solver/run.cpp).
+template <int D>
+double Simulation<D>::modelled_work(const Kokkos::View<double*>& node_work) const {
+  double w = WorkModel::element * m.bulk_elems() + WorkModel::interface * m.ni +
+             WorkModel::node * m.owned_nodes();
+  if (contact_) w += WorkModel::contact_unit * contact_->own_point_work(node_work, WorkModel::contact_unit);
+  return w;
+}
+
 template <int D>
 void Simulation<D>::agree_on_contact() {
   double d2 = 0, v2 = 0;
   largest_drift(m, xcut_, d2, v2);
-  double w[3] = {contact_->may_meet() ? -1.0 : 0.0, -std::sqrt(d2), -std::sqrt(v2)};
-  comm_->min(w, 3);  // the largest over the processes
+  double work = modelled_work();
+  double w[4] = {contact_->may_meet() ? -1.0 : 0.0, -std::sqrt(d2), -std::sqrt(v2), -work};
+  comm_->min(w, 4);  // the largest over the processes
+  comm_->sum(&work, 1);
   contact_meet_ = w[0] < 0;
   const double d = -w[1], speed = -w[2], room = zone_reach_ - contact_->radius;
   const double ahead = 2.0 * 25.0 * speed * dt, need = 2.0 * d + ahead;
+  Balance& b = balance_;
+  b.work_most = -w[3];
+  b.work_mean = work / comm_->size();
+  b.excess = b.work_mean > 0 ? b.work_most / b.work_mean - 1.0 : 0.0;
+  b.largest = std::max(b.largest, b.excess);
+  if (b.after_cut < 0) b.after_cut = b.excess;
+  if (b.excess > rebalance_above_ && b.excess > 2.0 * b.after_cut && ahead < room) recut_due_ = rebalance_due_ = true;
   if (test_recut_every_ > 0) {  // test hook: cut anew every that many steps (FDEM_TEST_RECUT)
     if (next_test_cut_ < 0) next_test_cut_ = step_count + test_recut_every_;
     if (step_count >= next_test_cut_ && ahead < room) recut_due_ = true;
@@ -141,6 +165,15 @@ void Simulation<D>::agree_on_contact() {
                 "parts are cut anew: give a larger contact.zone (docs/parallel.md) or run on one process",
                 comm_->size(), step_count, t, speed, room);
   throw InputError(msg);
+}
+
+template <int D>
+std::vector<double> Simulation<D>::node_work_whole() const {
+  Kokkos::View<double*> w("fdem::parts::node_work", m.nn);
+  if (contact_) contact_->own_point_work(w, WorkModel::contact_unit);
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), w);
+  return gather_rows(*comm_, h.data(), static_cast<size_t>(m.owned_nodes()), 1, node_global_,
+                     static_cast<size_t>(whole_nn_));
 }
 
 // The own rows of each field gathered on process 0 in the whole mesh's order; empty elsewhere.
@@ -451,6 +484,8 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
   template void Simulation<D>::exchange_ghosts();                                              \
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
+  template double Simulation<D>::modelled_work(const Kokkos::View<double*>&) const;             \
+  template std::vector<double> Simulation<D>::node_work_whole() const;                         \
   template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
   template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
   template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \

@@ -266,6 +266,45 @@ def check_recuts(fdem, fragmenting_base):
         print(r.stderr[-3000:])
 
 
+def check_rebalance(fdem, fragmenting_base):
+    """Rebalancing by the modelled work (docs/parallel.md, "Rebalancing"): the fragmenting 3D impact
+    on 2 processes, whose contacts gather near the plate, so one part's narrow phase grows. With the
+    rebalancing off the most loaded process's modelled work drifts above the mean; with
+    parallel.rebalance_above = 0.1 the parts are cut anew, weighted by the work, whenever it passes
+    that: each such cut at least halves the excess, fdem's own check of every cut passes (the run
+    ends with exit 1 otherwise), and the fragments and energies stay within the bounds of the runs
+    without cuts."""
+    name = "fragmenting, 2 processes"
+    got = {}
+    for above in (1000, 0.1):
+        out = os.path.join(WORK, f"rebalance-{above}")
+        r = run(fdem, 2, FRAGMENTING[0], FRAGMENTING[1] + [f'parallel={{"rebalance_above": {above}}}'], out)
+        check(r.returncode == 0, f"{name}, parallel.rebalance_above = {above}: exit {r.returncode}")
+        if r.returncode != 0:
+            print(r.stderr[-3000:])
+            return
+        with open(os.path.join(out, "summary.json")) as f:
+            got[above] = json.load(f)["processes"]
+        if above == 0.1 and fragmenting_base is not None:
+            compare_fragmenting(f"{name}, rebalanced", fragmenting_base,
+                                (history(os.path.join(out, "history.csv")),
+                                 history(os.path.join(out, "fragments.csv"))))
+    off, on = got[1000], got[0.1]
+    check(off["rebalances"] == 0 and off["work_excess_largest"] > 0.15,
+          f"{name}, no rebalancing: the most loaded process's work reaches {off['work_excess_largest']:.3f} above "
+          f"the mean (> 0.15), no rebalance")
+    at, after = on["work_excess_at_rebalances"], on["work_excess_after_cuts"]
+    check(on["rebalances"] >= 1 and on["rebalances"] == on["contact_recuts"] == len(at) == len(after) - 1,
+          f"{name}, rebalance_above 0.1: {on['rebalances']} rebalance(s), {on['contact_recuts']} cut(s), "
+          f"{len(at)} excess(es) logged, {len(after)} after cuts and start")
+    for k, (e, a) in enumerate(zip(at, after[1:])):
+        check(0.1 < e and a < 0.5 * e,
+              f"{name}, rebalance {k + 1}: the excess {e:.3f} (> 0.1) became {a:.4f} after the cut (< half)")
+    check(on["work_excess_largest"] < off["work_excess_largest"],
+          f"{name}: the largest excess {on['work_excess_largest']:.3f} with rebalancing, "
+          f"{off['work_excess_largest']:.3f} without")
+
+
 def history(path):
     with open(path) as f:
         rows = list(csv.reader(f))
@@ -414,6 +453,9 @@ def main():
 
     print("cutting the parts anew")
     check_recuts(fdem, base)
+
+    print("rebalancing by the modelled work")
+    check_rebalance(fdem, base)
 
     print("several bodies: per-body fragment statistics")
     got = {}
