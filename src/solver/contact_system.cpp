@@ -266,6 +266,10 @@ void ContactSystem<D>::update_lists(const Model<D>& m) {
   L.touched = tgrid_;
   L.tnode = tnode_;
   L.tface = tface_;
+  // the candidates of the own surface points only: over several processes a ghost point's contacts
+  // are its owner's (the narrow phase computes the own points', the others it only follows for the
+  // displacement bound); on one process all points are own
+  L.S.np = ns_own_;
   const int total = local_count<D>(L, filter_, cur_, next_.off, nn_);
   if (total > next_.capacity)
     reserve_pairs(next_,
@@ -301,11 +305,13 @@ void ContactSystem<D>::build(const Model<D>& m) {
   grid_geometry<D>(grid_, box, radius, cell_cap_);
   ensure_grid(grid_, na_, false);
   grid_bin<D>(grid_, S);
-  const int total = candidates_count<D>(grid_, S, filter_, next_.off, nn_);
+  SearchSet<D> Q = S;  // the candidates of the own surface points only (update_lists)
+  Q.np = ns_own_;
+  const int total = candidates_count<D>(grid_, Q, filter_, next_.off, nn_);
   if (total > next_.capacity)  // grow with headroom (like the grids: allocations during a run)
     reserve_pairs(next_,
                   static_cast<int>(std::min<long>(std::numeric_limits<int>::max(), 3L * total / 2 + 64)));
-  candidates_fill<D>(grid_, S, filter_, next_.off, next_.face);
+  candidates_fill<D>(grid_, Q, filter_, next_.off, next_.face);
   next_.size = total;
   transfer_history<D>(cur_, next_, slaves_, ns_, filter_);
   std::swap(cur_, next_);

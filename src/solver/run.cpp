@@ -1,6 +1,7 @@
 #include "solver/run.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -250,7 +251,9 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     // The cut is weighted by each element's modelled work of a step (WorkModel: its own and its
     // nodes' contact work; docs/parallel.md "Rebalancing"), so the parts carry equal work, not
     // equal element counts, where the contacts gather.
+    const auto cut0 = std::chrono::steady_clock::now();
     ++o.recuts;
+    o.cut_seconds += summary.value("gather_seconds", 0.0) + summary.value("setup_seconds", 0.0);
     const bool work = summary.value("rebalance", false);
     const double excess = summary.value("excess", 0.0);
     o.excess_after_cuts.push_back(summary.value("after_cut", 0.0));
@@ -296,6 +299,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     recut.file = "(the run's state where its parts were cut anew)";
     if (!root) mesh.bodies = part.mesh.bodies;
     r = &recut;
+    o.cut_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cut0).count();
   }
 }
 

@@ -46,6 +46,9 @@ struct RunOptions {
   // This process's time in the loop outside the exchange (which includes waiting for the others)
   // in the parts before the last cut: the measured side of the balance.
   double busy_seconds = 0;
+  // The wall time of the cuts so far (process 0's; the others wait for it): the whole state
+  // gathered, the partition, the parts and state sent, the new parts set up and checked.
+  double cut_seconds = 0;
   std::vector<int> cut_parts;
   const StateArrays* restarted = nullptr;
 };

@@ -257,15 +257,26 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
 }
 
 template <int D>
+double RunLoop<D>::cut_setup_seconds() const {
+  return restart_ && restart_ == opt_.recut ? seconds(loop0_ - wall0_) : 0.0;
+}
+
+template <int D>
 nlohmann::json RunLoop<D>::recut() {
+  const auto c0 = Clock::now();
+  const double busy = seconds(c0 - loop0_) - sim_.phase_times().exchange;
   StateArrays& st = *opt_.recut;
   st = StateArrays{};
-  collect_state(st, Clock::now(), ckpt_written_);
+  collect_state(st, c0, ckpt_written_);
   st.f64["recut/mass_momentum"] = sim_.whole_mass_momentum();
   st.f64["recut/node_work"] = sim_.node_work_whole();  // (process 0: the weights of the cut)
   const auto& b = sim_.balance();
-  return {{"recut", true}, {"rebalance", sim_.rebalance_due()}, {"excess", b.excess}, {"after_cut", b.after_cut},
-          {"largest", b.largest}, {"busy", seconds(Clock::now() - loop0_) - sim_.phase_times().exchange}};
+  // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
+  // new parts' set-up (the next RunLoop's, until its loop starts); this part's own set-up if it
+  // began at a cut
+  return {{"recut", true},        {"rebalance", sim_.rebalance_due()}, {"excess", b.excess},
+          {"after_cut", b.after_cut}, {"largest", b.largest},        {"busy", busy},
+          {"gather_seconds", seconds(Clock::now() - c0)}, {"setup_seconds", cut_setup_seconds()}};
 }
 
 // After a cut (every cut: the check costs one more gather of the state): the new parts hold the
@@ -354,12 +365,14 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     // the loop's time outside the exchange (which includes the waits for the others), every cut's
     // parts included: the measured balance
     comm->gather({opt_.busy_seconds + seconds(Clock::now() - loop0_) - sim_.phase_times().exchange}, busy);
+    const double cut_seconds = opt_.cut_seconds + cut_setup_seconds();
     const auto& b = sim_.balance();
     std::vector<double> after = opt_.excess_after_cuts;
     if (b.after_cut >= 0) after.push_back(b.after_cut);
     summary["processes"] = {{"count", comm->size()},
                             {"contact_recuts", opt_.recuts},
                             {"rebalances", opt_.rebalances},
+                            {"cut_seconds", cut_seconds},
                             {"exchange_bytes_per_step", bytes[0]},
                             {"exchange_bytes_per_step_most", -most[0]},
                             {"exchange_seconds_most", -most[1]},

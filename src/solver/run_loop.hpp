@@ -68,6 +68,9 @@ class RunLoop {
   const StateArrays* restart_;
   const Clock::time_point wall0_;
   Clock::time_point loop0_;
+  // A part that began at a cut (the restart state is opt.recut): its set-up's wall time, from the
+  // construction to the loop's start (a share of the cut's time; 0 otherwise).
+  double cut_setup_seconds() const;
   Simulation<D> sim_;
   const int boundary_nodes_;  // before contact adds crack faces to the platens' nodes
   OutputSchedule schedule_;

@@ -388,7 +388,7 @@ def main():
     check("processes" in mpi_line and "not in this build" not in mpi_line, "fdem info names the MPI")
     for name, (case, sets, cols_main, peak_tol, intact_tol) in CASES.items():
         print(f"{name}: {case}")
-        outs, frames, fragments = {}, {}, {}
+        outs, frames, fragments, cands = {}, {}, {}, {}
         for n in (1, 2, 3, 4):
             out = os.path.join(WORK, f"{name}-{n}")
             r = run(fdem, n, case, sets, out)
@@ -402,6 +402,8 @@ def main():
 
             with open(os.path.join(out, "summary.json")) as f:
                 s = json.load(f)
+            if s.get("contact", {}).get("candidate_pairs"):
+                cands[n] = s["contact"]["candidate_pairs"]
             if n > 1:
                 p = s.get("processes", {})
                 check(p.get("count") == n and p.get("exchange_bytes_per_step", 0) > 0,
@@ -410,6 +412,14 @@ def main():
         for n in (2, 3, 4):
             if 1 in outs and n in outs:
                 compare(name, cols_main, peak_tol, intact_tol, outs[1], outs[n], n)
+            # only the own surface nodes get candidate lists (docs/parallel.md "Contact"): the parts'
+            # lists together hold about as many pairs as one process's (each part builds them at its
+            # own steps, so not exactly as many; with every held surface node's lists they held
+            # about n times as many)
+            if 1 in cands and n in cands:
+                ratio = cands[n] / cands[1]
+                check(0.8 < ratio < 1.2, f"{name}, {n} processes: {cands[n]:.0f} candidate pairs over the parts at "
+                      f"the end against {cands[1]:.0f} on one process ({ratio:.3f}, within 20 %)")
             if 1 in fragments and n in fragments:
                 (ha, fa), (hb, fb) = fragments[1], fragments[n]
                 j, k = ha.index("fragments"), ha.index("largest_fraction")
