@@ -2,6 +2,7 @@
 """Strong and weak scaling of runs over several processes (docs/performance.md section 10).
 
     perf/mpi_scaling.py FDEM_MPI [--steps N] [--h H] [--procs 1,2,3,4] [--reps R] [--out FILE]
+    perf/mpi_scaling.py FDEM_MPI --migrations-only [--mh H] [--msteps N] [--reps R] [--out FILE]
     perf/mpi_scaling.py --markdown [--out FILE]
 
 FDEM_MPI: fdem built with -DFDEM_ENABLE_MPI=ON (scripts/mpi_check builds build/mpi/fdem). The 3D
@@ -14,6 +15,13 @@ the flight and the first impact), one thread per process, the process counts int
 From summary.json: the time loop's wall time, the exchange's bytes per step (all processes, and
 the most one process sends) and its seconds on the slowest process. A machine with 2 cores shows
 no speed-up beyond 2 processes: the figures above 2 say what oversubscription costs, not scaling.
+Cutting the parts anew (migration; docs/parallel.md "Rebalancing"): the 3D impact at 40 m/s with
+contact (it fragments; element size --mh, default 4 mm, --msteps steps, default 4000) on 2 processes,
+R times interleaved: without rebalancing, with the default rebalancing, and with the test hook that
+cuts every 100 steps and moves every element to the other process (FDEM_TEST_RECUT=100): the cuts,
+their wall time (summary.json processes.cut_seconds: the state gathered, the partition, the parts
+sent, the new parts set up and checked), the modelled work's largest excess over the mean and each
+process's loop time outside the exchange (busy_seconds: the measured balance).
 Also the exchange of larger decompositions without running them: `fdem partition` of the 3D
 impact at h = 1.5 mm (90 150 tetrahedra) into 2, 8 and 64 parts (METIS): the bytes each part
 would send per step, the input of the weak-scaling model in docs/performance.md section 10.
@@ -32,6 +40,50 @@ SETS = ['contact={"enabled": false}', "output.snapshot_count=0", "output.fragmen
 
 def arg(name, default):
     return sys.argv[sys.argv.index(name) + 1] if name in sys.argv else default
+
+
+def run_summary(fdem, n, sets, env_more=None):
+    with tempfile.TemporaryDirectory() as out:
+        cmd = [fdem, "run", CASE, "--out", out, "--quiet"]
+        for s in sets:
+            cmd += ["--set", s]
+        if n > 1:
+            cmd = ["mpirun", "--oversubscribe", "-n", str(n)] + [x for k in (env_more or {}) for x in ("-x", k)] + cmd
+            if os.geteuid() == 0:
+                cmd.insert(1, "--allow-run-as-root")
+        env = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false", GOMP_SPINCOUNT="1000", **(env_more or {}))
+        r = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        if r.returncode != 0:
+            raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
+        with open(os.path.join(out, "summary.json")) as f:
+            return json.load(f)
+
+
+MIGRATIONS = [("no rebalancing", ['parallel={"rebalance_above": 1000}'], None),
+              ("rebalancing (default)", [], None),
+              ("every element moved every 100 steps", ['parallel={"rebalance_above": 1000}'], {"FDEM_TEST_RECUT": "100"})]
+
+
+def migrations(fdem, reps):
+    h, steps = float(arg("--mh", "0.004")), int(arg("--msteps", "4000"))
+    sets = [f"parameters.h={h}", "parameters.speed=40", f"time.max_steps={steps}", "output.snapshot_count=0"]
+    got = {name: [] for name, _, _ in MIGRATIONS}
+    for _ in range(reps):
+        for name, more, env in MIGRATIONS:
+            got[name].append(run_summary(fdem, 2, sets + more, env))
+    rows = []
+    for name, ss in got.items():
+        med = lambda f: statistics.median(f(s) for s in ss)
+        p = lambda s: s["processes"]
+        rows.append({"what": name, "processes": 2, "h": h, "elements": ss[0]["counts"]["elements"],
+                     "steps": ss[0]["steps"], "loop_s": med(lambda s: s["loop_wall_seconds"]),
+                     "loop_s_all": [s["loop_wall_seconds"] for s in ss],
+                     "cuts": p(ss[0])["contact_recuts"], "rebalances": p(ss[0])["rebalances"],
+                     "cut_s": med(lambda s: p(s)["cut_seconds"]),
+                     "work_excess_largest": p(ss[0]).get("work_excess_largest", 0.0),
+                     "busy_s": [statistics.median(p(s)["busy_seconds"][k] for s in ss) for k in range(2)],
+                     "fragments": ss[0].get("fragments", {}).get("count")})
+    return rows
 
 
 def run(fdem, n, h, steps):
@@ -77,7 +129,7 @@ def measure(fdem):
     load = os.getloadavg()
     return {"machine": f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
             "command": " ".join(["perf/mpi_scaling.py"] + sys.argv[1:]), "rows": rows,
-            "decompositions": decompositions(fdem)}
+            "migrations": migrations(fdem, reps), "decompositions": decompositions(fdem)}
 
 
 def decompositions(fdem, h=0.0015, parts=(2, 8, 64)):
@@ -116,7 +168,16 @@ def markdown(res):
         lines.append(f"| {r['kind']} | {r['processes']} | {r['h'] * 1e3:.2f} | {r['elements']} | {r['loop_s']:.2f} | "
                      f"{ns:.0f} | {su} | {r['bytes_per_step']:.0f}; {r['bytes_per_step_most']:.0f} | "
                      f"{r['exchange_s_most']:.2f} |")
-    return "\n".join(lines) + f"\n\n{res['machine']}; `{res['command']}`\n"
+    text = "\n".join(lines) + f"\n\n{res['machine']}; `{res['command']}`\n"
+    mig = res.get("migrations") or []
+    if mig:
+        text += ("\n| 2 processes, fragmenting | cuts (rebalances) | loop (s) | cuts (s; per cut) | "
+                 "work excess (largest) | busy s (process 0; 1) |\n|---|---|---|---|---|---|\n")
+        for m in mig:
+            per = f"{m['cut_s'] / m['cuts']:.3f}" if m["cuts"] else "-"
+            text += (f"| {m['what']} | {m['cuts']} ({m['rebalances']}) | {m['loop_s']:.2f} | {m['cut_s']:.2f}; {per} | "
+                     f"{m['work_excess_largest']:.3f} | {m['busy_s'][0]:.2f}; {m['busy_s'][1]:.2f} |\n")
+    return text
 
 
 def main():
@@ -128,7 +189,13 @@ def main():
     if len(sys.argv) < 2 or sys.argv[1].startswith("--"):
         print(__doc__)
         return 2
-    res = measure(os.path.abspath(sys.argv[1]))
+    if "--migrations-only" in sys.argv:  # (the other rows kept from FILE)
+        with open(out) as f:
+            res = json.load(f)
+        res["migrations"] = migrations(os.path.abspath(sys.argv[1]), int(arg("--reps", "3")))
+        res["migrations_command"] = " ".join(["perf/mpi_scaling.py"] + sys.argv[1:])
+    else:
+        res = measure(os.path.abspath(sys.argv[1]))
     with open(out, "w") as f:
         json.dump(res, f, indent=1)
     print(markdown(res))

@@ -1087,6 +1087,29 @@ class Report:
         self.w()
         self.w(f"{d['machine']}; {d['rows'][0]['steps']} steps; command: `{d['command']}`.")
         self.w()
+        mig = d.get("migrations") or []
+        if mig:
+            self.w("Cutting the parts anew (migration; docs/parallel.md \"Rebalancing\"): the 3D impact at 40 m/s "
+                   f"with contact, h = {mig[0]['h'] * 1e3:.0f} mm ({mig[0]['elements']:,} tetrahedra; it fragments), "
+                   f"{mig[0]['steps']} steps on 2 processes of one thread, interleaved (medians): without "
+                   "rebalancing, with the default rebalancing (`parallel.rebalance_above` 0.2), and with the "
+                   "test hook that cuts every 100 steps and moves every element to the other process "
+                   "(`FDEM_TEST_RECUT=100`). Loop: the time loop's wall time, the cuts not included; a cut's "
+                   "time: the state gathered on process 0, the partition, the parts and state sent, the new "
+                   "parts set up and checked (per step: the cuts' time over the run's steps). Work excess: the modelled work of "
+                   "the most loaded process over the mean, minus 1 (largest seen); busy: each process's loop time "
+                   "outside the exchange, whose waits are the other's extra work.")
+            self.w()
+            self.w(table(["run", "cuts (for the work)", "loop (s)", "in cuts (s)", "per cut (s)",
+                          "per step (ms)", "work excess (largest)", "busy s (0; 1)"],
+                         [[m["what"], f"{m['cuts']} ({m['rebalances']})", f"{m['loop_s']:.2f}", f"{m['cut_s']:.2f}",
+                           f"{m['cut_s'] / m['cuts']:.3f}" if m["cuts"] else "-",
+                           f"{m['cut_s'] / m['steps'] * 1e3:.3f}", f"{m['work_excess_largest']:.3f}",
+                           f"{m['busy_s'][0]:.2f}; {m['busy_s'][1]:.2f}"] for m in mig]))
+            self.w()
+            if d.get("migrations_command"):
+                self.w(f"Command: `{d['migrations_command']}`.")
+                self.w()
         decs = d.get("decompositions") or []
         if not decs:
             return
