@@ -364,7 +364,8 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     comm->gather({setup_times::peak_rss_bytes()}, peaks);
     // the loop's time outside the exchange (which includes the waits for the others), every cut's
     // parts included: the measured balance
-    comm->gather({opt_.busy_seconds + seconds(Clock::now() - loop0_) - sim_.phase_times().exchange}, busy);
+    const double busy_here = opt_.busy_seconds + seconds(Clock::now() - loop0_) - sim_.phase_times().exchange;
+    comm->gather(std::vector<double>{busy_here}, busy);
     const double cut_seconds = opt_.cut_seconds + cut_setup_seconds();
     const auto& b = sim_.balance();
     std::vector<double> after = opt_.excess_after_cuts;
