@@ -60,6 +60,25 @@ void mass_momentum(const NodeData<D>& n, double (&s)[5]) {
 }
 
 // The interfaces among the first `count` whose handover flag is set (handed over to contact).
+// The narrow phase's work of the points points(0..np) in its units: `point_units` per point plus
+// its candidates (CSR offsets `off` by node); with a non-empty `w` also added per node,
+// w(node) += units * scale. Returns the sum (the balance of a run over processes, Simulation).
+inline double point_work(const Kokkos::View<int*>& off, const Kokkos::View<int*>& points, int np, int point_units,
+                         const Kokkos::View<double*>& w, double scale) {
+  const bool per_node = w.extent(0) > 0;
+  double total = 0;
+  Kokkos::parallel_reduce(
+      "fdem::contact::point_work", Kokkos::RangePolicy<ExecSpace>(0, np),
+      KOKKOS_LAMBDA(const int i, double& sum) {
+        const int s = points(i);
+        const double units = static_cast<double>(point_units + off(s + 1) - off(s));
+        if (per_node) w(s) += units * scale;  // (each surface node once in the list)
+        sum += units;
+      },
+      total);
+  return total;
+}
+
 inline long count_handed(const Kokkos::View<int*>& icontact, int count) {
   const auto ic = icontact;
   long handed = 0;

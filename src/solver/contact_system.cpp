@@ -7,6 +7,7 @@
 
 #include "common/error.hpp"
 #include "kernels/host_loops.hpp"
+#include "kernels/parts.hpp"
 
 namespace fdem {
 
@@ -420,20 +421,7 @@ int ContactSystem<D>::active_contacts() const {
 template <int D>
 double ContactSystem<D>::own_point_work(const Kokkos::View<double*>& w, double scale) const {
   if (!may_meet_ || ns_own_ == 0 || na_ == 0) return 0.0;
-  auto off = cur_.off;
-  auto pts = slaves_;
-  const bool per_node = w.extent(0) > 0;
-  double total = 0;
-  Kokkos::parallel_reduce(
-      "fdem::contact::point_work", Kokkos::RangePolicy<ExecSpace>(0, ns_own_),
-      KOKKOS_LAMBDA(const int i, double& sum) {
-        const int s = pts(i);
-        const double units = static_cast<double>(kPointWork + off(s + 1) - off(s));
-        if (per_node) w(s) += units * scale;  // (each surface node once in the list)
-        sum += units;
-      },
-      total);
-  return total;
+  return point_work(cur_.off, slaves_, ns_own_, kPointWork, w, scale);
 }
 
 template <int D>

@@ -14,7 +14,6 @@
 
 #include "common/error.hpp"
 #include "kernels/parts.hpp"
-#include "parallel/partition.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
@@ -123,14 +122,6 @@ void Simulation<D>::contact_over_parts() {
 // cut that could not do better is not repeated at once), the parts are cut anew, weighted by the
 // work (rebalance_due_; solver/run.cpp).
 template <int D>
-double Simulation<D>::modelled_work(const Kokkos::View<double*>& node_work) const {
-  double w = WorkModel::element * m.bulk_elems() + WorkModel::interface * m.ni +
-             WorkModel::node * m.owned_nodes();
-  if (contact_) w += WorkModel::contact_unit * contact_->own_point_work(node_work, WorkModel::contact_unit);
-  return w;
-}
-
-template <int D>
 void Simulation<D>::agree_on_contact() {
   double d2 = 0, v2 = 0;
   largest_drift(m, xcut_, d2, v2);
@@ -165,15 +156,6 @@ void Simulation<D>::agree_on_contact() {
                 "parts are cut anew: give a larger contact.zone (docs/parallel.md) or run on one process",
                 comm_->size(), step_count, t, speed, room);
   throw InputError(msg);
-}
-
-template <int D>
-std::vector<double> Simulation<D>::node_work_whole() const {
-  Kokkos::View<double*> w("fdem::parts::node_work", m.nn);
-  if (contact_) contact_->own_point_work(w, WorkModel::contact_unit);
-  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), w);
-  return gather_rows(*comm_, h.data(), static_cast<size_t>(m.owned_nodes()), 1, node_global_,
-                     static_cast<size_t>(whole_nn_));
 }
 
 // The own rows of each field gathered on process 0 in the whole mesh's order; empty elsewhere.
@@ -484,8 +466,6 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
   template void Simulation<D>::exchange_ghosts();                                              \
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
-  template double Simulation<D>::modelled_work(const Kokkos::View<double*>&) const;             \
-  template std::vector<double> Simulation<D>::node_work_whole() const;                         \
   template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
   template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
   template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \

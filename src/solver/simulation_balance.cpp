@@ -1,0 +1,32 @@
+// Simulation's side of the balance of a run over processes (docs/parallel.md "Rebalancing"): the
+// modelled work of a step (WorkModel) and each node's contact work for the weights of a cut.
+#include <vector>
+
+#include "parallel/partition.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+template <int D>
+double Simulation<D>::modelled_work(const Kokkos::View<double*>& node_work) const {
+  double w = WorkModel::element * m.bulk_elems() + WorkModel::interface * m.ni +
+             WorkModel::node * m.owned_nodes();
+  if (contact_) w += WorkModel::contact_unit * contact_->own_point_work(node_work, WorkModel::contact_unit);
+  return w;
+}
+
+template <int D>
+std::vector<double> Simulation<D>::node_work_whole() const {
+  Kokkos::View<double*> w("fdem::parts::node_work", m.nn);
+  if (contact_) contact_->own_point_work(w, WorkModel::contact_unit);
+  auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), w);
+  return gather_rows(*comm_, h.data(), static_cast<size_t>(m.owned_nodes()), 1, node_global_,
+                     static_cast<size_t>(whole_nn_));
+}
+
+template double Simulation<2>::modelled_work(const Kokkos::View<double*>&) const;
+template double Simulation<3>::modelled_work(const Kokkos::View<double*>&) const;
+template std::vector<double> Simulation<2>::node_work_whole() const;
+template std::vector<double> Simulation<3>::node_work_whole() const;
+
+}  // namespace fdem
