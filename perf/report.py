@@ -1091,8 +1091,9 @@ class Report:
         if mig:
             self.w("Cutting the parts anew (migration; docs/parallel.md \"Rebalancing\"): the 3D impact at 40 m/s "
                    f"with contact, h = {mig[0]['h'] * 1e3:.0f} mm ({mig[0]['elements']:,} tetrahedra; it fragments), "
-                   f"{mig[0]['steps']} steps on 2 processes of one thread, interleaved (medians): without "
-                   "rebalancing, with the default rebalancing (`parallel.rebalance_above` 0.2), and with the "
+                   f"{mig[0]['steps']} steps on 2 processes of one thread, its default contact zone (1 mean "
+                   "element size: every run is also cut anew when its nodes have moved far into the zones), "
+                   "interleaved (medians): without rebalancing, with the default rebalancing (`parallel.rebalance_above` 0.2), and with the "
                    "test hook that cuts every 100 steps and moves every element to the other process "
                    "(`FDEM_TEST_RECUT=100`). Loop: the time loop's wall time, the cuts not included; a cut's "
                    "time: the state gathered on process 0, the partition, the parts and state sent, the new "

@@ -97,7 +97,7 @@ struct ContactSpec {
   double cohesion = 0;     // Pa
   double skin = 0;         // m, Verlet skin of the broad phase; 0: derive (0.02 mean element size)
   // m, over several processes: how far beyond the search distance each process holds the faces
-  // its contacts may touch (docs/parallel.md "Contact"); 0: derive (3 mean element sizes)
+  // its contacts may touch (docs/parallel.md "Contact"); 0: derive (1 mean element size)
   double zone = 0;
 };
 

@@ -81,7 +81,7 @@ CASES = {
                        'boundary.point_loads=[{"set": "load_point", "force": [0, -500], "ramp_time": 1e-4}]'],
              ["load_load [N]", "load_point_uy [m]", "mouth_right_ux [m]"], 1e-6, 1e-6),
 }
-# the same with contact on, as the cases ship it (contact.zone derived: 3 mean element sizes)
+# the same with contact on, as the cases ship it (contact.zone derived: 1 mean element size)
 CASES.update({name + "+contact": (case, [x for x in sets if x not in COMMON], cols, peak, intact)
               for name, (case, sets, cols, peak, intact) in CASES.items() if name != "beam"})
 # the 3D impact at 40 m/s, 4000 steps, contact on: it breaks into about 190 fragments that touch
