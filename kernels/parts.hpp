@@ -59,7 +59,6 @@ void mass_momentum(const NodeData<D>& n, double (&s)[5]) {
       s[0], s[1], s[2], s[3], s[4]);
 }
 
-// The interfaces among the first `count` whose handover flag is set (handed over to contact).
 // The narrow phase's work of the points points(0..np) in its units: `point_units` per point plus
 // its candidates (CSR offsets `off` by node); with a non-empty `w` also added per node,
 // w(node) += units * scale. Returns the sum (the balance of a run over processes, Simulation).
@@ -79,6 +78,7 @@ inline double point_work(const Kokkos::View<int*>& off, const Kokkos::View<int*>
   return total;
 }
 
+// The interfaces among the first `count` whose handover flag is set (handed over to contact).
 inline long count_handed(const Kokkos::View<int*>& icontact, int count) {
   const auto ic = icontact;
   long handed = 0;

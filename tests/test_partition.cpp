@@ -101,6 +101,19 @@ TEST(Partition, WeightedBisectionBalancesTheWorkNotTheElements) {
     EXPECT_DOUBLE_EQ(base[e], fdem::WorkModel::element + nv * fdem::WorkModel::node +
                                   side_a * fdem::WorkModel::interface);
   }
+  {  // the interfaces handed over to contact count for nothing: one flag takes one interface's work
+    // off its side-A element and nothing else; every flag leaves the bulk and the nodes alone
+    std::vector<long long> handed(m.num_ifaces(), 0);
+    const int q = m.num_ifaces() / 2, a = m.iface_elems[2 * static_cast<size_t>(q)];
+    handed[q] = 1;
+    const std::vector<double> one = fdem::element_work(m, {}, handed);
+    for (int e = 0; e < m.num_elems(); ++e)
+      EXPECT_DOUBLE_EQ(one[e], base[e] - (e == a ? fdem::WorkModel::interface : 0.0));
+    std::fill(handed.begin(), handed.end(), 1);
+    for (double x : fdem::element_work(m, {}, handed))
+      EXPECT_DOUBLE_EQ(x, fdem::WorkModel::element + nv * fdem::WorkModel::node);
+    EXPECT_THROW(fdem::element_work(m, {}, std::vector<long long>(3, 0)), fdem::InputError);
+  }
   double total = 0, biggest = 0;
   for (double w : base) total += w;
   // contact work on the lowest tenth of the nodes (where a falling sphere meets the plate)

@@ -9,15 +9,19 @@
 
 namespace fdem {
 
-std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>& node_work) {
+std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>& node_work,
+                                 const std::vector<long long>& handed) {
   const int ne = mesh.num_elems(), nn = mesh.num_nodes(), nv = mesh.dim + 1;
   if (!node_work.empty() && node_work.size() != static_cast<size_t>(nn))
     throw InputError("element_work: " + std::to_string(node_work.size()) + " node values for " +
                      std::to_string(nn) + " nodes");
+  if (!handed.empty() && handed.size() != static_cast<size_t>(mesh.num_ifaces()))
+    throw InputError("element_work: " + std::to_string(handed.size()) + " handover flags for " +
+                     std::to_string(mesh.num_ifaces()) + " interfaces");
   std::vector<double> w(ne, WorkModel::element + nv * WorkModel::node);
   for (int i = 0; i < mesh.num_ifaces(); ++i) {
     const int a = mesh.iface_elems[2 * static_cast<size_t>(i)];
-    if (a >= 0 && a < ne) w[a] += WorkModel::interface;
+    if (a >= 0 && a < ne && (handed.empty() || handed[i] == 0)) w[a] += WorkModel::interface;
   }
   if (node_work.empty()) return w;
   std::vector<int> at(nn, 0);  // elements at each node (one where interfaces were inserted)
