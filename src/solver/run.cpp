@@ -231,6 +231,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   RunOptions o = opt;
   if (restart.has("processes/contact_recuts")) o.recuts = static_cast<int>(restart.get_int("processes/contact_recuts"));
   if (restart.has("processes/rebalances")) o.rebalances = static_cast<int>(restart.get_int("processes/rebalances"));
+  if (restart.has("processes/elements_moved")) o.elements_moved = restart.get_int("processes/elements_moved");
   if (root && o.recuts > 0 && restart.has("processes/contact_recuts")) o.cut_parts = elem_part_at_start;
   o.progress = opt.progress && root;
   const StateArrays* r = opt.restart.empty() ? nullptr : &restart;
@@ -269,6 +270,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
       std::snprintf(why, sizeof why, "nodes had moved far into the contact zones");
     }
     o.last_cut_reason = why;
+    o.cut_reasons.push_back(summary.value("reason", std::string()));
     std::vector<std::vector<char>> states;
     if (root) {
       setup_times::Phase phase("decomposition");
@@ -284,6 +286,11 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
       }
       if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
         for (int& p : elem_part) p = (p + o.recuts) % comm.size();
+      const std::vector<int>& before = o.cut_parts.empty() ? elem_part_at_start : o.cut_parts;
+      long long moved_now = 0;  // the elements that change process at this cut
+      for (size_t e = 0; e < elem_part.size(); ++e) moved_now += e >= before.size() || before[e] != elem_part[e];
+      o.elements_moved_at_cuts.push_back(moved_now);
+      o.elements_moved += moved_now;
       o.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)
       parts = packed_parts(*whole, elem_part, comm.size(), whole_reach, &x);
       const std::vector<char> bytes = pack_state(recut);

@@ -43,6 +43,12 @@ struct RunOptions {
   std::vector<double> excess_at_rebalances, excess_after_cuts;
   double excess_largest = 0;
   std::string last_cut_reason;  // for the progress note of the cut
+  // Each cut of this invocation: why ("work", "zones", "test"; Simulation::recut_reason) and, on
+  // process 0, how many elements changed process; and the elements moved by all the run's cuts
+  // (a checkpoint holds it).
+  std::vector<std::string> cut_reasons;
+  std::vector<long long> elements_moved_at_cuts;
+  long long elements_moved = 0;
   // This process's time in the loop outside the exchange (which includes waiting for the others)
   // in the parts before the last cut: the measured side of the balance.
   double busy_seconds = 0;

@@ -238,6 +238,7 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
     if (!writes_) return false;
     st.put_int("processes/contact_recuts", opt_.recuts);  // (how a restart cuts its parts: run.cpp)
     st.put_int("processes/rebalances", opt_.rebalances);
+    st.put_int("processes/elements_moved", opt_.elements_moved);
     st.f64["processes/balance"] = {sim_.balance().after_cut, sim_.balance().largest};
     if (!opt_.cut_parts.empty()) st.i64["processes/cut_parts"].assign(opt_.cut_parts.begin(), opt_.cut_parts.end());
   } else {
@@ -274,7 +275,8 @@ nlohmann::json RunLoop<D>::recut() {
   // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
   // new parts' set-up (the next RunLoop's, until its loop starts); this part's own set-up if it
   // began at a cut
-  return {{"recut", true},        {"rebalance", sim_.rebalance_due()}, {"excess", b.excess},
+  return {{"recut", true},        {"rebalance", sim_.rebalance_due()}, {"reason", sim_.recut_reason()},
+          {"excess", b.excess},
           {"after_cut", b.after_cut}, {"largest", b.largest},        {"busy", busy},
           {"gather_seconds", seconds(Clock::now() - c0)}, {"setup_seconds", cut_setup_seconds()}};
 }
@@ -373,6 +375,9 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     summary["processes"] = {{"count", comm->size()},
                             {"contact_recuts", opt_.recuts},
                             {"rebalances", opt_.rebalances},
+                            {"cut_reasons", opt_.cut_reasons},
+                            {"elements_moved", opt_.elements_moved},
+                            {"elements_moved_at_cuts", opt_.elements_moved_at_cuts},
                             {"cut_seconds", cut_seconds},
                             {"exchange_bytes_per_step", bytes[0]},
                             {"exchange_bytes_per_step_most", -most[0]},

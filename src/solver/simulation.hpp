@@ -221,6 +221,9 @@ class Simulation {
     double work_most = 0, work_mean = 0;  // ns per step, at the last check
   };
   bool rebalance_due() const { return rebalance_due_; }
+  // Why the parts are to be cut anew: "work" (the balance), "zones" (the contact zones' check) or
+  // "test" (the test hook FDEM_TEST_RECUT); the first of them on the step it was asked.
+  const char* recut_reason() const { return recut_reason_; }
   const Balance& balance() const { return balance_; }
   void restore_balance(const std::vector<double>& after_cut_largest) {  // (a checkpoint's: RunLoop)
     balance_.after_cut = after_cut_largest.at(0);
@@ -254,6 +257,7 @@ class Simulation {
   Kokkos::View<double* [D]> xcut_;  // the own nodes' positions where the parts were cut (SubMesh::cut_x)
   bool recut_due_ = false;
   bool rebalance_due_ = false;
+  const char* recut_reason_ = "";
   double rebalance_above_ = 0.2;  // Case::rebalance_above
   Balance balance_;
   // Test hook (tests/mpi/check_runs.py): the environment variable FDEM_TEST_RECUT=N cuts the parts

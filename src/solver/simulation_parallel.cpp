@@ -138,14 +138,21 @@ void Simulation<D>::agree_on_contact() {
   b.excess = b.work_mean > 0 ? b.work_most / b.work_mean - 1.0 : 0.0;
   b.largest = std::max(b.largest, b.excess);
   if (b.after_cut < 0) b.after_cut = b.excess;
-  if (b.excess > rebalance_above_ && b.excess > 2.0 * b.after_cut && ahead < room) recut_due_ = rebalance_due_ = true;
+  auto due = [this](const char* why) {
+    if (!recut_due_) recut_reason_ = why;
+    recut_due_ = true;
+  };
+  if (b.excess > rebalance_above_ && b.excess > 2.0 * b.after_cut && ahead < room) {
+    due("work");
+    rebalance_due_ = true;
+  }
   if (test_recut_every_ > 0) {  // test hook: cut anew every that many steps (FDEM_TEST_RECUT)
     if (next_test_cut_ < 0) next_test_cut_ = step_count + test_recut_every_;
-    if (step_count >= next_test_cut_ && ahead < room) recut_due_ = true;
+    if (step_count >= next_test_cut_ && ahead < room) due("test");
   }
   if (need < room) return;
   if (ahead < room) {  // valid again once cut at the current positions
-    recut_due_ = true;
+    due("zones");
     return;
   }
   char msg[640];
