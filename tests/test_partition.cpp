@@ -95,11 +95,12 @@ TEST(Partition, WeightedBisectionBalancesTheWorkNotTheElements) {
   const HostMesh& m = sphere();
   const std::vector<double> base = fdem::element_work(m, {});
   const int nv = m.dim + 1;
+  const fdem::WorkModel wm;  // the defaults
   for (int e = 0; e < 3; ++e) {  // each element's own work: bulk, its nodes, side-A interfaces
     int side_a = 0;
     for (int i = 0; i < m.num_ifaces(); ++i) side_a += m.iface_elems[2 * static_cast<size_t>(i)] == e;
-    EXPECT_DOUBLE_EQ(base[e], fdem::WorkModel::element + nv * fdem::WorkModel::node +
-                                  side_a * fdem::WorkModel::interface);
+    EXPECT_DOUBLE_EQ(base[e], wm.element + nv * wm.node +
+                                  side_a * wm.interface);
   }
   {  // the interfaces handed over to contact count for nothing: one flag takes one interface's work
     // off its side-A element and nothing else; every flag leaves the bulk and the nodes alone
@@ -108,11 +109,18 @@ TEST(Partition, WeightedBisectionBalancesTheWorkNotTheElements) {
     handed[q] = 1;
     const std::vector<double> one = fdem::element_work(m, {}, handed);
     for (int e = 0; e < m.num_elems(); ++e)
-      EXPECT_DOUBLE_EQ(one[e], base[e] - (e == a ? fdem::WorkModel::interface : 0.0));
+      EXPECT_DOUBLE_EQ(one[e], base[e] - (e == a ? wm.interface : 0.0));
     std::fill(handed.begin(), handed.end(), 1);
     for (double x : fdem::element_work(m, {}, handed))
-      EXPECT_DOUBLE_EQ(x, fdem::WorkModel::element + nv * fdem::WorkModel::node);
+      EXPECT_DOUBLE_EQ(x, wm.element + nv * wm.node);
     EXPECT_THROW(fdem::element_work(m, {}, std::vector<long long>(3, 0)), fdem::InputError);
+    // a case's own model (parallel.work_model): the interfaces alone, at 1 ns each
+    fdem::WorkModel only;
+    only.element = only.node = 1e-300;
+    only.interface = 1;
+    const std::vector<double> own = fdem::element_work(m, {}, {}, only);
+    for (int e = 0; e < m.num_elems(); ++e)
+      EXPECT_NEAR(own[e], (base[e] - wm.element - nv * wm.node) / wm.interface, 1e-12);
   }
   double total = 0, biggest = 0;
   for (double w : base) total += w;

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mesh/mesh.hpp"
+#include "parallel/work_model.hpp"
 
 namespace fdem {
 
@@ -139,6 +140,7 @@ struct Case {
   // modelled work per step exceeds the mean by more than this fraction (and by more than twice
   // what it exceeded it by right after the last cut); docs/parallel.md "Rebalancing".
   double rebalance_above = 0.2;
+  WorkModel work_model;  // its ns per item (parallel.work_model; defaults: one host thread's)
 
   double local_damping = 0;      // alpha, [0, 1)
   double mass_damping = 0;       // c, 1/s

@@ -167,8 +167,18 @@ void read_contact(json& doc, Case& c, const Reader& R) {
 // (docs/parallel.md, "Rebalancing"); a run on one process reads it and does nothing with it.
 void read_parallel(json& doc, Case& c, const Reader& R) {
   json& par = R.object(doc, "", "parallel", false);
-  R.keys(par, "parallel", {"rebalance_above"});
+  R.keys(par, "parallel", {"rebalance_above", "work_model"});
   c.rebalance_above = R.number(par, "parallel", "rebalance_above", between(0.01, false, 1000, false), 0.2);
+  if (par.contains("work_model")) {  // ns a step per item (docs/parallel.md "Rebalancing": how to measure them)
+    json& wm = R.object(par, "parallel", "work_model", false);
+    const std::string P = "parallel.work_model";
+    R.keys(wm, P, {"element_ns", "interface_ns", "node_ns", "contact_unit_ns"});
+    WorkModel& w = c.work_model;
+    w.element = R.number(wm, P, "element_ns", between(0, true, 100000, false), w.element);
+    w.interface = R.number(wm, P, "interface_ns", between(0, true, 100000, false), w.interface);
+    w.node = R.number(wm, P, "node_ns", between(0, true, 100000, false), w.node);
+    w.contact_unit = R.number(wm, P, "contact_unit_ns", between(0, true, 100000, false), w.contact_unit);
+  }
 }
 
 void read_damping(json& doc, Case& c, const Reader& R) {

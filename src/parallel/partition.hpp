@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "parallel/work_model.hpp"
+
 namespace fdem {
 
 struct HostMesh;
@@ -47,28 +49,17 @@ ElementGraph element_graph(const HostMesh& mesh);
 // (naming --parts and the allowed range) and for metis in a build without METIS.
 // Deterministic: the same mesh and arguments give the same result.
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method);
-// The work model of a run over processes (docs/parallel.md "Rebalancing"): nanoseconds of one
-// thread's step per bulk element, per interface not handed over to contact, per node (its update)
-// and per unit of the contact's work (a surface point counts 2 units, each of its candidate faces
-// 1), measured on the default 3D impact's late stage on one thread (docs/parallel.md): the contact
-// kernels 4.63 ms a step for 107 503 candidates and 20 101 surface points (31 ns a unit), the force
-// pass 2.6 ms for 12 577 tetrahedra and 23 898 interfaces, 3 134 of them handed over (the model:
-// 2.62 ms); the node update about 11 ns a node
-// on large meshes (docs/performance.md). Only their ratios matter.
-struct WorkModel {
-  static constexpr double element = 60, interface = 90, node = 11, contact_unit = 31;
-};
 
 // Recursive coordinate bisection with the given work per element (positive and finite): the cut
 // of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Throws
 // InputError for parts out of [1, elements] or a weight count or value that does not fit.
 std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work);
-// Each element's work in WorkModel's terms: its own (bulk, nodes, the interfaces whose side A it
+// Each element's work in `model`'s terms (ns a step): its own (bulk, nodes, the interfaces whose side A it
 // is, less those whose `handed` flag is set: handed over to contact, they cost about nothing) and
 // an equal share of each of its nodes' `node_work` (the contact work of the surface nodes). Empty
 // `node_work` or `handed`: none.
 std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>& node_work,
-                                 const std::vector<long long>& handed = {});
+                                 const std::vector<long long>& handed = {}, const WorkModel& model = {});
 
 // Starts what the method needs once per process (MPI and Zoltan for the zoltan methods; nothing
 // for the others), so that the partition's time excludes it. partition_elements calls it too.

@@ -1,4 +1,4 @@
-// The work of each element in the work model of a run over processes (partition.hpp: WorkModel,
+// The work of each element in the work model of a run over processes (work_model.hpp: WorkModel; partition.hpp:
 // element_work; docs/parallel.md "Rebalancing").
 #include <string>
 #include <vector>
@@ -10,7 +10,7 @@
 namespace fdem {
 
 std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>& node_work,
-                                 const std::vector<long long>& handed) {
+                                 const std::vector<long long>& handed, const WorkModel& model) {
   const int ne = mesh.num_elems(), nn = mesh.num_nodes(), nv = mesh.dim + 1;
   if (!node_work.empty() && node_work.size() != static_cast<size_t>(nn))
     throw InputError("element_work: " + std::to_string(node_work.size()) + " node values for " +
@@ -18,10 +18,10 @@ std::vector<double> element_work(const HostMesh& mesh, const std::vector<double>
   if (!handed.empty() && handed.size() != static_cast<size_t>(mesh.num_ifaces()))
     throw InputError("element_work: " + std::to_string(handed.size()) + " handover flags for " +
                      std::to_string(mesh.num_ifaces()) + " interfaces");
-  std::vector<double> w(ne, WorkModel::element + nv * WorkModel::node);
+  std::vector<double> w(ne, model.element + nv * model.node);
   for (int i = 0; i < mesh.num_ifaces(); ++i) {
     const int a = mesh.iface_elems[2 * static_cast<size_t>(i)];
-    if (a >= 0 && a < ne && (handed.empty() || handed[i] == 0)) w[a] += WorkModel::interface;
+    if (a >= 0 && a < ne && (handed.empty() || handed[i] == 0)) w[a] += model.interface;
   }
   if (node_work.empty()) return w;
   std::vector<int> at(nn, 0);  // elements at each node (one where interfaces were inserted)

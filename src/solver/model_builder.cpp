@@ -322,6 +322,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   sc.interfaces = build_interfaces<D>(c, mesh, el.mass, m);
   coh0_ = m.coh;
   rebalance_above_ = c.rebalance_above;
+  work_model_ = c.work_model;
   build_interface_chunks<D>(mesh, m);
   interfaces.stop();
 

@@ -282,7 +282,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         moved.X = x;
         const std::vector<long long>& handed =
             recut.int_array("model/icontact", static_cast<long long>(whole->num_ifaces()));
-        elem_part = partition_elements_weighted(moved, comm.size(), element_work(moved, nw, handed));
+        elem_part = partition_elements_weighted(moved, comm.size(), element_work(moved, nw, handed, c.work_model));
       }
       if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
         for (int& p : elem_part) p = (p + o.recuts) % comm.size();

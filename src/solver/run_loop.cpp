@@ -388,6 +388,9 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
     if (b.after_cut >= 0) {  // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
       nlohmann::json& p = summary["processes"];
       p["rebalance_above"] = c_.rebalance_above;
+      const WorkModel& wm = c_.work_model;
+      p["work_model_ns"] = {{"element", wm.element}, {"interface", wm.interface}, {"node", wm.node},
+                            {"contact_unit", wm.contact_unit}};
       p["work_excess"] = b.excess;
       p["work_excess_largest"] = std::max(b.largest, opt_.excess_largest);
       p["work_excess_at_rebalances"] = opt_.excess_at_rebalances;

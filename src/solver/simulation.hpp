@@ -259,6 +259,7 @@ class Simulation {
   bool rebalance_due_ = false;
   const char* recut_reason_ = "";
   double rebalance_above_ = 0.2;  // Case::rebalance_above
+  WorkModel work_model_;           // Case::work_model
   Balance balance_;
   // Test hook (tests/mpi/check_runs.py): the environment variable FDEM_TEST_RECUT=N cuts the parts
   // anew every N steps (at the next zone check), each time with the parts' ids rotated, so that

@@ -14,16 +14,16 @@ double Simulation<D>::modelled_work(const Kokkos::View<double*>& node_work) cons
   // nothing (the late stage of the default 3D impact: force pass 2.62 ms a step measured, 2.62
   // modelled without them, 2.91 with them; docs/parallel.md "Rebalancing")
   const long live = m.ni - count_handed(m.icontact, m.ni);
-  double w = WorkModel::element * m.bulk_elems() + WorkModel::interface * static_cast<double>(live) +
-             WorkModel::node * m.owned_nodes();
-  if (contact_) w += WorkModel::contact_unit * contact_->own_point_work(node_work, WorkModel::contact_unit);
+  const WorkModel& wm = work_model_;
+  double w = wm.element * m.bulk_elems() + wm.interface * static_cast<double>(live) + wm.node * m.owned_nodes();
+  if (contact_) w += wm.contact_unit * contact_->own_point_work(node_work, wm.contact_unit);
   return w;
 }
 
 template <int D>
 std::vector<double> Simulation<D>::node_work_whole() const {
   Kokkos::View<double*> w("fdem::parts::node_work", m.nn);
-  if (contact_) contact_->own_point_work(w, WorkModel::contact_unit);
+  if (contact_) contact_->own_point_work(w, work_model_.contact_unit);
   auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), w);
   return gather_rows(*comm_, h.data(), static_cast<size_t>(m.owned_nodes()), 1, node_global_,
                      static_cast<size_t>(whole_nn_));

@@ -310,6 +310,21 @@ def check_rebalance(fdem, fragmenting_base):
     check(on["work_excess_largest"] < off["work_excess_largest"],
           f"{name}: the largest excess {on['work_excess_largest']:.3f} with rebalancing, "
           f"{off['work_excess_largest']:.3f} without")
+    # a case's own work model (parallel.work_model): with the contact's work made negligible the
+    # modelled imbalance (which the contacts at the plate make) nearly goes
+    out = os.path.join(WORK, "rebalance-model")
+    model = {"element_ns": 60, "interface_ns": 90, "node_ns": 11, "contact_unit_ns": 0.001}
+    r = run(fdem, 2, FRAGMENTING[0],
+            FRAGMENTING[1] + ['parallel=' + json.dumps({"rebalance_above": 1000, "work_model": model})], out)
+    check(r.returncode == 0, f"{name}, parallel.work_model with a negligible contact unit: exit {r.returncode}")
+    if r.returncode == 0:
+        with open(os.path.join(out, "summary.json")) as f:
+            own = json.load(f)["processes"]
+        got_model = own.get("work_model_ns", {})
+        check(got_model == {"element": 60, "interface": 90, "node": 11, "contact_unit": 0.001} and
+              own["work_excess_largest"] < 0.5 * off["work_excess_largest"],
+              f"{name}, parallel.work_model with a negligible contact unit: summary's model {got_model}, the "
+              f"largest excess {own['work_excess_largest']:.3f} (< half of {off['work_excess_largest']:.3f})")
 
 
 EXPLODING = "tests/mpi/exploding_disc.json"
