@@ -179,6 +179,16 @@ def check_restarts(fdem, name, ck, after_tol=None):
                     history(os.path.join(out, "history.csv")), n, after_tol)
 
 
+def within_largest(name, h, a, b, tolerances):
+    """Each (column, tolerance): the rows b of history.csv within tolerance of the column's largest
+    value in the rows a."""
+    for col, tol in tolerances:
+        c = h.index(col)
+        top = max(abs(r[c]) for r in a)
+        d = max(abs(ra[c] - rb[c]) for ra, rb in zip(a, b)) / top
+        check(d < tol, f"{name}: {col} within {d:.1e} of its largest value (< {tol:g})")
+
+
 def compare_fragmenting(name, base, got):
     """The fragmenting 3D impact against the run on 1 process (see FRAGMENTING)."""
     (h, a), (fh, fa) = base
@@ -192,11 +202,7 @@ def compare_fragmenting(name, base, got):
     check(dn <= 0 and dl < 1e-3,
           f"{name}: {fb[-1][j]:.0f} fragments against {fa[-1][j]:.0f}, counts within 2 % in "
           f"every row, largest fraction within {dl:.1e} (< 1e-3)")
-    for col, tol in (("E_kinetic [J]", 5e-3), ("D_fracture [J]", 5e-3)):
-        c = h.index(col)
-        top = max(abs(r[c]) for r in a)
-        d = max(abs(ra[c] - rb[c]) for ra, rb in zip(a, b)) / top
-        check(d < tol, f"{name}: {col} within {d:.1e} of its largest value (< {tol:g})")
+    within_largest(name, h, a, b, (("E_kinetic [J]", 5e-3), ("D_fracture [J]", 5e-3)))
     for col, tol in (("interfaces_damaged", 0.01), ("interfaces_failed", 0.02)):
         c = h.index(col)
         check(abs(a[-1][c] - b[-1][c]) <= tol * a[-1][c] + 1,
@@ -396,11 +402,7 @@ def check_exploding(fdem):
         dn = max(abs(a[j] - b[j]) - max(2.0, 0.02 * a[j]) for a, b in zip(frows1, frows))
         check(dn <= 0, f"{name}: {frows[-1][j]:.0f} fragments against {frows1[-1][j]:.0f}, within 2 % or 2 in "
                        f"every row")
-        for col, tol in (("E_kinetic [J]", 1e-4), ("D_fracture [J]", 5e-3)):
-            c = h.index(col)
-            top = max(abs(r_[c]) for r_ in rows1)
-            d = max(abs(a[c] - b[c]) for a, b in zip(rows1, rows)) / top
-            check(d < tol, f"{name}: {col} within {d:.1e} of its largest value (< {tol:g})")
+        within_largest(name, h, rows1, rows, (("E_kinetic [J]", 1e-4), ("D_fracture [J]", 5e-3)))
         for col, tol, plus in (("interfaces_failed", 0.02, 1), ("interfaces_damaged", 0.03, 0)):
             c = h.index(col)
             check(abs(rows[-1][c] - rows1[-1][c]) <= tol * rows1[-1][c] + plus,
