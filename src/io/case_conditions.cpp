@@ -169,7 +169,8 @@ void read_parallel(json& doc, Case& c, const Reader& R) {
   json& par = R.object(doc, "", "parallel", false);
   R.keys(par, "parallel", {"rebalance_above", "work_model"});
   c.rebalance_above = R.number(par, "parallel", "rebalance_above", between(0.01, false, 1000, false), 0.2);
-  if (par.contains("work_model")) {  // ns a step per item (docs/parallel.md "Rebalancing": how to measure them)
+  // ns a step per item (docs/parallel.md "Rebalancing": how to measure them)
+  if (par.contains("work_model")) {
     json& wm = R.object(par, "parallel", "work_model", false);
     const std::string P = "parallel.work_model";
     R.keys(wm, P, {"element_ns", "interface_ns", "node_ns", "contact_unit_ns"});

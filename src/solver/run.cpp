@@ -282,13 +282,15 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         moved.X = x;
         const std::vector<long long>& handed =
             recut.int_array("model/icontact", static_cast<long long>(whole->num_ifaces()));
-        elem_part = partition_elements_weighted(moved, comm.size(), element_work(moved, nw, handed, c.work_model));
+        elem_part =
+            partition_elements_weighted(moved, comm.size(), element_work(moved, nw, handed, c.work_model));
       }
       if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
         for (int& p : elem_part) p = (p + o.recuts) % comm.size();
       const std::vector<int>& before = o.cut_parts.empty() ? elem_part_at_start : o.cut_parts;
       long long moved_now = 0;  // the elements that change process at this cut
-      for (size_t e = 0; e < elem_part.size(); ++e) moved_now += e >= before.size() || before[e] != elem_part[e];
+      for (size_t e = 0; e < elem_part.size(); ++e)
+        moved_now += e >= before.size() || before[e] != elem_part[e];
       o.elements_moved_at_cuts.push_back(moved_now);
       o.elements_moved += moved_now;
       o.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)

@@ -15,7 +15,8 @@ double Simulation<D>::modelled_work(const Kokkos::View<double*>& node_work) cons
   // modelled without them, 2.91 with them; docs/parallel.md "Rebalancing")
   const long live = m.ni - count_handed(m.icontact, m.ni);
   const WorkModel& wm = work_model_;
-  double w = wm.element * m.bulk_elems() + wm.interface * static_cast<double>(live) + wm.node * m.owned_nodes();
+  double w = wm.element * m.bulk_elems() + wm.interface * static_cast<double>(live) +
+             wm.node * m.owned_nodes();
   if (contact_) w += wm.contact_unit * contact_->own_point_work(node_work, wm.contact_unit);
   return w;
 }
