@@ -255,7 +255,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     const auto cut0 = std::chrono::steady_clock::now();
     ++o.recuts;
     o.cut_seconds += summary.value("gather_seconds", 0.0) + summary.value("setup_seconds", 0.0);
-    const bool work = summary.value("rebalance", false);
+    const std::string reason = summary.value("reason", std::string());
+    const bool work = reason == "work";
     const double excess = summary.value("excess", 0.0);
     o.excess_after_cuts.push_back(summary.value("after_cut", 0.0));
     o.excess_largest = std::max(o.excess_largest, summary.value("largest", 0.0));
@@ -270,7 +271,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
       std::snprintf(why, sizeof why, "nodes had moved far into the contact zones");
     }
     o.last_cut_reason = why;
-    o.cut_reasons.push_back(summary.value("reason", std::string()));
+    o.cut_reasons.push_back(reason);
     std::vector<std::vector<char>> states;
     if (root) {
       setup_times::Phase phase("decomposition");

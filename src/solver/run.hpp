@@ -35,7 +35,7 @@ struct RunOptions {
   // the checkpoint the run first went on from (null: none).
   StateArrays* recut = nullptr;
   int recuts = 0;
-  // Of those cuts, the ones the balance asked for (Simulation::rebalance_due), the excess of the
+  // Of those cuts, the ones the balance asked for (Simulation::recut_reason "work"), the excess of the
   // most loaded process's work over the mean that asked for each, and the excess at the first
   // check after each cut (docs/parallel.md "Rebalancing"); and on process 0 each element's part at
   // the last cut (a checkpoint holds it: a restart on as many processes cuts its parts the same).

@@ -275,8 +275,7 @@ nlohmann::json RunLoop<D>::recut() {
   // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
   // new parts' set-up (the next RunLoop's, until its loop starts); this part's own set-up if it
   // began at a cut
-  return {{"recut", true},        {"rebalance", sim_.rebalance_due()}, {"reason", sim_.recut_reason()},
-          {"excess", b.excess},
+  return {{"recut", true},        {"reason", sim_.recut_reason()}, {"excess", b.excess},
           {"after_cut", b.after_cut}, {"largest", b.largest},        {"busy", busy},
           {"gather_seconds", seconds(Clock::now() - c0)}, {"setup_seconds", cut_setup_seconds()}};
 }

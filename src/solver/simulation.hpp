@@ -213,14 +213,13 @@ class Simulation {
   // interfaces, own nodes and the narrow phase's work of its own surface points), and how far the
   // largest exceeds the mean (max / mean - 1). When that excess passes the case's
   // parallel.rebalance_above and twice the excess at the first check after the last cut, the
-  // parts are cut anew (recut_due(), with rebalance_due()), weighted by the work.
+  // parts are cut anew (recut_due(), with recut_reason() "work"), weighted by the work.
   struct Balance {
     double excess = 0;      // at the last check
     double after_cut = -1;  // at the first check after the last cut (or the start); -1: none yet
     double largest = 0;     // the largest seen
     double work_most = 0, work_mean = 0;  // ns per step, at the last check
   };
-  bool rebalance_due() const { return rebalance_due_; }
   // Why the parts are to be cut anew: "work" (the balance), "zones" (the contact zones' check) or
   // "test" (the test hook FDEM_TEST_RECUT); the first of them on the step it was asked.
   const char* recut_reason() const { return recut_reason_; }
@@ -256,7 +255,6 @@ class Simulation {
   double zone_reach_ = 0;  // SubMesh::contact_reach
   Kokkos::View<double* [D]> xcut_;  // the own nodes' positions where the parts were cut (SubMesh::cut_x)
   bool recut_due_ = false;
-  bool rebalance_due_ = false;
   const char* recut_reason_ = "";
   double rebalance_above_ = 0.2;  // Case::rebalance_above
   WorkModel work_model_;           // Case::work_model

@@ -120,7 +120,7 @@ void Simulation<D>::contact_over_parts() {
 // and its mean over the processes; when the largest exceeds the mean by more than
 // rebalance_above_ and by more than twice what it did at the first check after the last cut (so a
 // cut that could not do better is not repeated at once), the parts are cut anew, weighted by the
-// work (rebalance_due_; solver/run.cpp).
+// work (recut_reason_ "work"; solver/run.cpp).
 template <int D>
 void Simulation<D>::agree_on_contact() {
   double d2 = 0, v2 = 0;
@@ -142,10 +142,7 @@ void Simulation<D>::agree_on_contact() {
     if (!recut_due_) recut_reason_ = why;
     recut_due_ = true;
   };
-  if (b.excess > rebalance_above_ && b.excess > 2.0 * b.after_cut && ahead < room) {
-    due("work");
-    rebalance_due_ = true;
-  }
+  if (b.excess > rebalance_above_ && b.excess > 2.0 * b.after_cut && ahead < room) due("work");
   if (test_recut_every_ > 0) {  // test hook: cut anew every that many steps (FDEM_TEST_RECUT)
     if (next_test_cut_ < 0) next_test_cut_ = step_count + test_recut_every_;
     if (step_count >= next_test_cut_ && ahead < room) due("test");
