@@ -93,6 +93,17 @@ std::vector<std::array<double, 3>> centroids(const HostMesh& m) {
   return c;
 }
 
+#ifdef FDEM_HAVE_ZOLTAN
+// The centroids as Zoltan takes them: dim coordinates per element, one after the other.
+std::vector<double> centroid_coords(const HostMesh& m) {
+  const auto c = centroids(m);
+  std::vector<double> xyz(c.size() * static_cast<size_t>(m.dim));
+  for (size_t e = 0; e < c.size(); ++e)
+    for (int d = 0; d < m.dim; ++d) xyz[e * m.dim + d] = c[e][d];
+  return xyz;
+}
+#endif
+
 // Recursive coordinate bisection (a baseline): split the elements at the weighted median of their
 // centroids along the longest side of their bounding box, in proportion to the parts on each side.
 void rcb(const std::vector<std::array<double, 3>>& c, const std::vector<double>& w, int dim, int* first,
@@ -198,10 +209,17 @@ std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, co
     if (!(w > 0) || !std::isfinite(w)) throw InputError("partition: an element weight is not a positive number");
   std::vector<int> part(ne, 0);
   if (parts == 1) return part;
+#ifdef FDEM_HAVE_ZOLTAN
+  // Zoltan's RCB (the MPI build, which alone cuts during a run), the largest part within 1 % of the
+  // mean work; the baseline below where the build has no Zoltan (docs/parallel.md, "Rebalancing")
+  return zoltan_partition(mesh.dim, centroid_coords(mesh), std::vector<float>(work.begin(), work.end()), parts,
+                          "RCB", 1.01);
+#else
   std::vector<int> ids(ne);
   std::iota(ids.begin(), ids.end(), 0);
   rcb(centroids(mesh), work, mesh.dim, ids.data(), ids.data() + ne, 0, parts, part);
   return part;
+#endif
 }
 
 void partition_init(PartitionMethod method) {
@@ -255,10 +273,7 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
     if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
         method == PartitionMethod::ZoltanHsfc) {
 #ifdef FDEM_HAVE_ZOLTAN
-      const auto c = centroids(mesh);
-      std::vector<double> xyz(static_cast<size_t>(ne) * mesh.dim);
-      for (int e = 0; e < ne; ++e)
-        for (int d = 0; d < mesh.dim; ++d) xyz[static_cast<size_t>(e) * mesh.dim + d] = c[e][d];
+      const std::vector<double> xyz = centroid_coords(mesh);
       const char* lb = method == PartitionMethod::ZoltanRcb   ? "RCB"
                        : method == PartitionMethod::ZoltanRib ? "RIB"
                                                               : "HSFC";

@@ -51,8 +51,10 @@ ElementGraph element_graph(const HostMesh& mesh);
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method);
 
 // Recursive coordinate bisection with the given work per element (positive and finite): the cut
-// of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Throws
-// InputError for parts out of [1, elements] or a weight count or value that does not fit.
+// of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Zoltan's
+// RCB (largest part within 1 % of the mean) in a build with Zoltan (the MPI build), else the
+// baseline `rcb` (weighted medians). Throws InputError for parts out of [1, elements] or a weight
+// count or value that does not fit.
 std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work);
 // Each element's work in `model`'s terms (ns a step): its own (bulk, nodes, the interfaces whose side A it
 // is, less those whose `handed` flag is set: handed over to contact, they cost about nothing) and

@@ -70,7 +70,7 @@ void zoltan_init() {
 }
 
 std::vector<int> zoltan_partition(int dim, const std::vector<double>& xyz, const std::vector<float>& weight,
-                                  int parts, const std::string& lb_method) {
+                                  int parts, const std::string& lb_method, double imbalance_tol) {
   zoltan_init();
   Points pts{dim, static_cast<int>(weight.size()), xyz.data(), weight.data()};
   Zoltan_Struct* zz = Zoltan_Create(MPI_COMM_SELF);
@@ -80,7 +80,7 @@ std::vector<int> zoltan_partition(int dim, const std::vector<double>& xyz, const
   Zoltan_Set_Param(zz, "NUM_LID_ENTRIES", "1");
   Zoltan_Set_Param(zz, "OBJ_WEIGHT_DIM", "1");
   Zoltan_Set_Param(zz, "NUM_GLOBAL_PARTS", std::to_string(parts).c_str());
-  Zoltan_Set_Param(zz, "IMBALANCE_TOL", "1.03");
+  Zoltan_Set_Param(zz, "IMBALANCE_TOL", std::to_string(imbalance_tol).c_str());
   Zoltan_Set_Param(zz, "RETURN_LISTS", "PARTS");
   Zoltan_Set_Num_Obj_Fn(zz, num_obj, &pts);
   Zoltan_Set_Obj_List_Fn(zz, obj_list, &pts);

@@ -173,11 +173,13 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     const double reach = contact_wanted(c, mesh) ? 0.25 * (mq.min_size > 0 ? mq.min_size : mq.mean_size) +
                                                        c.contact.skin + c.contact.zone
                                                  : 0.0;
-    // METIS when the build has it, else coordinate bisection (docs/parallel.md). A restart with
-    // contact cuts its parts where the run last cut them (the checkpoint's processes/cut_x), as
-    // the run did: coordinate bisection there after a cut during the run; so its zones hold as
-    // they did, and on as many processes the parts are the same (the run goes on to the bit)
-    const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : PartitionMethod::Rcb;
+    // METIS when the build has it, else coordinate bisection (Zoltan's RCB where the build has
+    // Zoltan, as every MPI build does; docs/parallel.md). A restart with contact cuts its parts
+    // where the run last cut them (the checkpoint's processes/cut_x), as the run did: coordinate
+    // bisection there after a cut during the run; so its zones hold as they did, and on as many
+    // processes the parts are the same (the run goes on to the bit)
+    const PartitionMethod bisection = partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
+    const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : bisection;
     const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
     const std::vector<double>* at =
         resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;
@@ -200,7 +202,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
       } else {
         HostMesh moved = mesh;
         moved.X = *at;
-        elem_part = partition_elements(moved, comm.size(), PartitionMethod::Rcb);
+        elem_part = partition_elements(moved, comm.size(), bisection);
       }
     } else {
       elem_part = partition_elements(mesh, comm.size(), method);
