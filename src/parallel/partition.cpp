@@ -197,7 +197,33 @@ ElementGraph element_graph(const HostMesh& m) {
   return g;
 }
 
-std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work) {
+#ifdef FDEM_HAVE_METIS
+// METIS_PartGraphKway on the element graph with vertex weights vwgt (one per element, >= 1).
+static std::vector<int> metis_kway(const ElementGraph& g, std::vector<idx_t> vwgt, int parts) {
+  const idx_t ne = static_cast<idx_t>(vwgt.size());
+  std::vector<idx_t> xadj(g.xadj.begin(), g.xadj.end()), adj(g.adj.begin(), g.adj.end()), out(ne, 0);
+  idx_t nv = ne, ncon = 1, np = parts, objval = 0;
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_NUMBERING] = 0;
+  options[METIS_OPTION_SEED] = 1;  // fixed: the same partition every time
+  // the best of 4 tries (different seeds inside METIS): 0-12 % fewer cut interfaces than one try on
+  // the disc and the 3D impact at 2-16 parts, at 2-3 times the time
+  options[METIS_OPTION_NCUTS] = 4;
+  // load within 1 % of the mean (METIS's default: 3 %): 1-3 % more interfaces cut on the 3D impact
+  // meshes at 8 and 64 parts, imbalance 0.3-1.0 % instead of 0.7-3.0 % (docs/parallel.md)
+  options[METIS_OPTION_UFACTOR] = 10;
+  const int rc = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adj.data(), vwgt.data(), nullptr, nullptr, &np,
+                                     nullptr, nullptr, options, &objval, out.data());
+  if (rc != METIS_OK)
+    throw std::runtime_error("METIS_PartGraphKway failed (status " + std::to_string(rc) + ") for " +
+                             std::to_string(ne) + " elements into " + std::to_string(parts) + " parts");
+  return std::vector<int>(out.begin(), out.end());
+}
+#endif
+
+std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work,
+                                             bool graph) {
   const int ne = mesh.num_elems();
   if (parts < 1 || parts > ne)
     throw InputError("partition: " + std::to_string(parts) + " parts is out of range: give an integer in [1, " +
@@ -209,6 +235,16 @@ std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, co
     if (!(w > 0) || !std::isfinite(w)) throw InputError("partition: an element weight is not a positive number");
   std::vector<int> part(ne, 0);
   if (parts == 1) return part;
+  if (graph) {
+#ifdef FDEM_HAVE_METIS
+    const double most = *std::max_element(work.begin(), work.end());
+    std::vector<idx_t> vwgt(ne);  // integers for METIS: the largest weight 1000, each at least 1
+    for (int e = 0; e < ne; ++e) vwgt[e] = std::max<idx_t>(1, static_cast<idx_t>(std::lround(1000 * work[e] / most)));
+    return metis_kway(element_graph(mesh), std::move(vwgt), parts);
+#else
+    throw InputError(kNoMetis);
+#endif
+  }
 #ifdef FDEM_HAVE_ZOLTAN
   // Zoltan's RCB (the MPI build, which alone cuts during a run), the largest part within 1 % of the
   // mean work; the baseline below where the build has no Zoltan (docs/parallel.md, "Rebalancing")
@@ -242,25 +278,7 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
   if (method == PartitionMethod::Metis) {
 #ifdef FDEM_HAVE_METIS
     const ElementGraph g = element_graph(mesh);
-    std::vector<idx_t> xadj(g.xadj.begin(), g.xadj.end()), adj(g.adj.begin(), g.adj.end());
-    std::vector<idx_t> vwgt(g.weight.begin(), g.weight.end()), out(ne, 0);
-    idx_t nv = ne, ncon = 1, np = parts, objval = 0;
-    idx_t options[METIS_NOPTIONS];
-    METIS_SetDefaultOptions(options);
-    options[METIS_OPTION_NUMBERING] = 0;
-    options[METIS_OPTION_SEED] = 1;  // fixed: the same partition every time
-    // the best of 4 tries (different seeds inside METIS): 0-12 % fewer cut interfaces than one try on
-    // the disc and the 3D impact at 2-16 parts, at 2-3 times the time
-    options[METIS_OPTION_NCUTS] = 4;
-    // load within 1 % of the mean (METIS's default: 3 %): 1-3 % more interfaces cut on the 3D impact
-    // meshes at 8 and 64 parts, imbalance 0.3-1.0 % instead of 0.7-3.0 % (docs/parallel.md)
-    options[METIS_OPTION_UFACTOR] = 10;
-    const int rc = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adj.data(), vwgt.data(), nullptr, nullptr,
-                                       &np, nullptr, nullptr, options, &objval, out.data());
-    if (rc != METIS_OK)
-      throw std::runtime_error("METIS_PartGraphKway failed (status " + std::to_string(rc) + ") for " +
-                               std::to_string(ne) + " elements into " + std::to_string(parts) + " parts");
-    part.assign(out.begin(), out.end());
+    part = metis_kway(g, std::vector<idx_t>(g.weight.begin(), g.weight.end()), parts);
 #else
     throw InputError(kNoMetis);
 #endif

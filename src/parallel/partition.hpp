@@ -53,9 +53,12 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
 // Recursive coordinate bisection with the given work per element (positive and finite): the cut
 // of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Zoltan's
 // RCB (largest part within 1 % of the mean) in a build with Zoltan (the MPI build), else the
-// baseline `rcb` (weighted medians). Throws InputError for parts out of [1, elements] or a weight
-// count or value that does not fit.
-std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work);
+// baseline `rcb` (weighted medians). With `graph`: METIS k-way on the mesh's element graph instead
+// (the weights scaled to integers up to 1000; the measurement of docs/parallel.md, "Rebalancing").
+// Throws InputError for parts out of [1, elements], a weight count or value that does not fit, or
+// `graph` in a build without METIS.
+std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, const std::vector<double>& work,
+                                             bool graph = false);
 // Each element's work in `model`'s terms (ns a step): its own (bulk, nodes, the interfaces whose side A it
 // is, less those whose `handed` flag is set: handed over to contact, they cost about nothing) and
 // an equal share of each of its nodes' `node_work` (the contact work of the surface nodes). Empty

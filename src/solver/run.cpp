@@ -123,6 +123,15 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 namespace {
 
+// The measurement switch FDEM_CUT_METHOD (docs/parallel.md, "Rebalancing"): "rcb" (or unset), the
+// cut by Zoltan's RCB; "metis", by METIS's graph of the interfaces not handed over to contact.
+bool cut_by_graph() {
+  const char* m = std::getenv("FDEM_CUT_METHOD");
+  if (!m || !*m || std::string(m) == "rcb") return false;
+  if (std::string(m) == "metis") return true;
+  throw InputError("FDEM_CUT_METHOD='" + std::string(m) + "': give rcb or metis (unset: rcb)");
+}
+
 // Every process's part of `mesh` (decompose), packed for sending.
 std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vector<int>& elem_part, int parts,
                                             double reach, const std::vector<double>* at) {
@@ -180,6 +189,7 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     // processes the parts are the same (the run goes on to the bit)
     const PartitionMethod bisection = partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : bisection;
+    if (reach > 0) cut_by_graph();  // a bad FDEM_CUT_METHOD fails here, before the run
     const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
     const std::vector<double>* at =
         resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;
@@ -285,8 +295,16 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         moved.X = x;
         const std::vector<long long>& handed =
             recut.int_array("model/icontact", static_cast<long long>(whole->num_ifaces()));
-        elem_part =
-            partition_elements_weighted(moved, comm.size(), element_work(moved, nw, handed, c.work_model));
+        const std::vector<double> work = element_work(moved, nw, handed, c.work_model);
+        if (cut_by_graph()) {  // (measurement switch) METIS on the graph of the interfaces not handed over
+          std::vector<double> x3(3 * static_cast<size_t>(moved.num_nodes()), 0.0), gone(handed.size());
+          for (int n = 0; n < moved.num_nodes(); ++n)
+            for (int k = 0; k < moved.dim; ++k) x3[3 * static_cast<size_t>(n) + k] = x[static_cast<size_t>(n) * moved.dim + k];
+          for (size_t i = 0; i < handed.size(); ++i) gone[i] = handed[i] != 0;
+          elem_part = partition_elements_weighted(moved_mesh(moved, x3, gone), comm.size(), work, true);
+        } else {
+          elem_part = partition_elements_weighted(moved, comm.size(), work);
+        }
       }
       if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
         for (int& p : elem_part) p = (p + o.recuts) % comm.size();
