@@ -316,6 +316,28 @@ def check_rebalance(fdem, fragmenting_base):
     check(on["work_excess_largest"] < off["work_excess_largest"],
           f"{name}: the largest excess {on['work_excess_largest']:.3f} with rebalancing, "
           f"{off['work_excess_largest']:.3f} without")
+    # the measurement switch FDEM_CUT_METHOD=metis (docs/parallel.md: why the cuts are geometric):
+    # the same rebalancing with METIS's graph; every cut passes fdem's own check, the fracturing
+    # stays within the bounds, and the graph, cut from scratch, moves more elements than the RCB
+    out = os.path.join(WORK, "rebalance-metis")
+    r = run(fdem, 2, FRAGMENTING[0], FRAGMENTING[1] + ['parallel={"rebalance_above": 0.1}'], out,
+            env={"FDEM_CUT_METHOD": "metis"})
+    check(r.returncode == 0, f"{name}, FDEM_CUT_METHOD=metis: exit {r.returncode}")
+    if r.returncode == 0:
+        if fragmenting_base is not None:
+            compare_fragmenting(f"{name}, cut by METIS", fragmenting_base,
+                                (history(os.path.join(out, "history.csv")),
+                                 history(os.path.join(out, "fragments.csv"))))
+        with open(os.path.join(out, "summary.json")) as f:
+            graph = json.load(f)["processes"]
+        moved_rcb, moved_graph = on["elements_moved"], graph["elements_moved"]
+        check(graph["contact_recuts"] >= 1 and moved_graph > moved_rcb,
+              f"{name}, FDEM_CUT_METHOD=metis: {graph['contact_recuts']} cut(s) moved {moved_graph} elements "
+              f"(RCB's: {moved_rcb})")
+    r = run(fdem, 2, FRAGMENTING[0], FRAGMENTING[1] + ["time.max_steps=10"], os.path.join(WORK, "cut-bad"),
+            env={"FDEM_CUT_METHOD": "graph"})
+    check(r.returncode == 2 and "FDEM_CUT_METHOD='graph': give rcb or metis" in r.stderr,
+          f"FDEM_CUT_METHOD=graph: exit {r.returncode} (2) naming the variable and its values")
     # a case's own work model (parallel.work_model): with the contact's work made negligible the
     # modelled imbalance (which the contacts at the plate make) nearly goes
     out = os.path.join(WORK, "rebalance-model")
@@ -349,9 +371,9 @@ def check_exploding(fdem):
     frame's sizes as on 1 process. The sectors also crack inside (the sudden start sends strong
     waves), a fracturing run whose counts a different order of sums moves a little: measured on 2-4
     processes against 1 (one thread each), the same 206 failed interfaces but one (205 on 4),
-    1612-1639 damaged against 1642 (1.8 %; one process on 2 threads: 1618, 1.5 %), 25-26 fragments
-    against 26, the kinetic energy within 1.5e-6 and the fracture dissipation within 4.2e-4 of
-    their largest values; so fragments within 2 % or 2 in every row of fragments.csv, failed
+    1618-1643 damaged against 1642 (1.5 %; one process on 2 threads: 1618, 1.5 %), 25-26 fragments
+    against 26, the kinetic energy within 1.4e-6 and the fracture dissipation within 4.3e-4 of
+    their largest values (1612-1639, 1.5e-6 and 4.2e-4 before Zoltan's RCB made the cuts); so fragments within 2 % or 2 in every row of fragments.csv, failed
     interfaces within 2 % + 1, damaged within 3 %, the kinetic energy within 1e-4 and the
     dissipation within 5e-3."""
     base = None
