@@ -239,7 +239,8 @@ std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, co
 #ifdef FDEM_HAVE_METIS
     const double most = *std::max_element(work.begin(), work.end());
     std::vector<idx_t> vwgt(ne);  // integers for METIS: the largest weight 1000, each at least 1
-    for (int e = 0; e < ne; ++e) vwgt[e] = std::max<idx_t>(1, static_cast<idx_t>(std::lround(1000 * work[e] / most)));
+    for (int e = 0; e < ne; ++e)
+      vwgt[e] = std::max<idx_t>(1, static_cast<idx_t>(std::lround(1000 * work[e] / most)));
     return metis_kway(element_graph(mesh), std::move(vwgt), parts);
 #else
     throw InputError(kNoMetis);
@@ -248,8 +249,8 @@ std::vector<int> partition_elements_weighted(const HostMesh& mesh, int parts, co
 #ifdef FDEM_HAVE_ZOLTAN
   // Zoltan's RCB (the MPI build, which alone cuts during a run), the largest part within 1 % of the
   // mean work; the baseline below where the build has no Zoltan (docs/parallel.md, "Rebalancing")
-  return zoltan_partition(mesh.dim, centroid_coords(mesh), std::vector<float>(work.begin(), work.end()), parts,
-                          "RCB", 1.01);
+  const std::vector<float> weight(work.begin(), work.end());
+  return zoltan_partition(mesh.dim, centroid_coords(mesh), weight, parts, "RCB", 1.01);
 #else
   std::vector<int> ids(ne);
   std::iota(ids.begin(), ids.end(), 0);

@@ -187,7 +187,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
     // where the run last cut them (the checkpoint's processes/cut_x), as the run did: coordinate
     // bisection there after a cut during the run; so its zones hold as they did, and on as many
     // processes the parts are the same (the run goes on to the bit)
-    const PartitionMethod bisection = partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
+    const PartitionMethod bisection =
+        partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : bisection;
     if (reach > 0) cut_by_graph();  // a bad FDEM_CUT_METHOD fails here, before the run
     const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
@@ -299,7 +300,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         if (cut_by_graph()) {  // (measurement switch) METIS on the graph of the interfaces not handed over
           std::vector<double> x3(3 * static_cast<size_t>(moved.num_nodes()), 0.0), gone(handed.size());
           for (int n = 0; n < moved.num_nodes(); ++n)
-            for (int k = 0; k < moved.dim; ++k) x3[3 * static_cast<size_t>(n) + k] = x[static_cast<size_t>(n) * moved.dim + k];
+            for (int k = 0; k < moved.dim; ++k)
+              x3[3 * static_cast<size_t>(n) + k] = x[static_cast<size_t>(n) * moved.dim + k];
           for (size_t i = 0; i < handed.size(); ++i) gone[i] = handed[i] != 0;
           elem_part = partition_elements_weighted(moved_mesh(moved, x3, gone), comm.size(), work, true);
         } else {

@@ -373,9 +373,9 @@ def check_exploding(fdem):
     processes against 1 (one thread each), the same 206 failed interfaces but one (205 on 4),
     1618-1643 damaged against 1642 (1.5 %; one process on 2 threads: 1618, 1.5 %), 25-26 fragments
     against 26, the kinetic energy within 1.4e-6 and the fracture dissipation within 4.3e-4 of
-    their largest values (1612-1639, 1.5e-6 and 4.2e-4 before Zoltan's RCB made the cuts); so fragments within 2 % or 2 in every row of fragments.csv, failed
-    interfaces within 2 % + 1, damaged within 3 %, the kinetic energy within 1e-4 and the
-    dissipation within 5e-3."""
+    their largest values (1612-1639, 1.5e-6 and 4.2e-4 before Zoltan's RCB made the cuts); so
+    fragments within 2 % or 2 in every row of fragments.csv, failed interfaces within 2 % + 1,
+    damaged within 3 %, the kinetic energy within 1e-4 and the dissipation within 5e-3."""
     base = None
     for n in (1, 2, 3, 4):
         name = f"exploding disc, {n} process{'es' if n > 1 else ''}"
