@@ -334,7 +334,7 @@ TEST_F(Restart, CorruptedCheckpointIsRefusedNamingTheDataset) {
   EXPECT_EQ(run(out, sets + " --restart " + v2), 2);
   log = slurp(out + ".log");
   EXPECT_NE(log.find("restart file '" + v2 +
-                     "' is a checkpoint of format version 2; this fdem reads version 3 "
+                     "' is a checkpoint of format version 2; this fdem reads versions 3 to 4 "
                      "(earlier versions carry no checksum"),
             std::string::npos)
       << log;

@@ -16,50 +16,46 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "io/checkpoint_internal.hpp"
 #include "io/hdf5_util.hpp"
 
 namespace fdem {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-const char* kFormat = "fdem checkpoint";
-// 2: contact pairs carry a penetration allowance (contact/pair_g0)
-// 3: every dataset carries an FNV-1a 64 checksum of its values (attribute "checksum") and the root
-//    one of the header and the dataset list; run/fragment_rows. Earlier versions are refused: they
-//    cannot be verified, and their restart would lose fragments.csv's rows.
-constexpr int kVersion = 3;
-const char* kChecksum = "checksum";
+namespace ckpt {
 
 using h5::Id;
 
-// The HDF5 error as " (message)", or "".
 std::string reason() {
   const std::string msg = h5::reason();
   return msg.empty() ? std::string() : " (" + msg + ")";
 }
 
-// Test hook (see checkpoint.hpp): which checkpoint of this process to kill in or after.
-struct KillHook {
-  int during = 0, after = 0;
-  KillHook() {
-    const char* e = std::getenv("FDEM_TEST_CHECKPOINT_KILL");
-    if (!e) return;
-    const std::string s = e;
-    const auto colon = s.find(':');
-    if (colon == std::string::npos) return;
-    const int n = std::atoi(s.c_str() + colon + 1);
-    if (s.compare(0, colon, "during") == 0) during = n;
-    if (s.compare(0, colon, "after") == 0) after = n;
-  }
-};
+KillHook::KillHook() {
+  const char* e = std::getenv("FDEM_TEST_CHECKPOINT_KILL");
+  if (!e) return;
+  const std::string s = e;
+  const auto colon = s.find(':');
+  if (colon == std::string::npos) return;
+  const int n = std::atoi(s.c_str() + colon + 1);
+  if (s.compare(0, colon, "during") == 0) during = n;
+  if (s.compare(0, colon, "after") == 0) after = n;
+}
+
+const KillHook& kill_hook() {
+  static const KillHook hook;
+  return hook;
+}
 
 void kill_now() {
   std::fflush(stdout);
   std::fflush(stderr);
   std::raise(SIGKILL);
+  std::_Exit(137);  // (SIGKILL cannot be caught: not reached)
 }
+
+namespace {
 
 void fsync_path(const std::string& p, bool dir, const std::string& file) {
   const int fd = ::open(p.c_str(), dir ? (O_RDONLY | O_DIRECTORY) : O_RDONLY);
@@ -75,6 +71,8 @@ void fsync_path(const std::string& p, bool dir, const std::string& file) {
     throw InputError("cannot write checkpoint '" + file + "' (syncing " + p + "): " + std::strerror(err));
 }
 
+}  // namespace
+
 void string_attr(hid_t loc, const char* name, const std::string& v, const std::string& file) {
   Id t(H5Tcopy(H5T_C_S1), H5Tclose);
   Id sp(H5Screate(H5S_SCALAR), H5Sclose);
@@ -85,6 +83,8 @@ void string_attr(hid_t loc, const char* name, const std::string& v, const std::s
   if (!a.ok() || H5Awrite(a.get(), t.get(), buf.data()) < 0)
     throw InputError("cannot write checkpoint '" + file + "': attribute " + name + reason());
 }
+
+namespace {
 
 template <class T>
 void scalar_attr(hid_t loc, const char* name, hid_t ftype, hid_t mtype, T v, const std::string& file) {
@@ -100,12 +100,26 @@ struct VisitData {
   std::map<std::string, std::string> checksums;  // of every dataset, verified
 };
 
-// The checksum of a dataset: FNV-1a 64 of its values' bytes in memory (float64 / int64 of a
-// little-endian host: the file's types) or of the string's characters, as 16 hex digits.
+}  // namespace
+
 std::string values_checksum(const void* data, size_t bytes) { return hash_hex(data, bytes); }
 
-// The root checksum: the header's values, then every dataset's name and checksum in name order,
-// so that an altered header attribute or a dataset removed or added shows too.
+uint64_t rows_hash(const void* data, size_t rows, size_t row_bytes, uint64_t first_row) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  uint64_t sum = 0;
+  for (size_t r = 0; r < rows; ++r) {
+    const uint64_t index = first_row + r;
+    sum += fnv1a(p + r * row_bytes, row_bytes, fnv1a(&index, sizeof index));
+  }
+  return sum;
+}
+
+std::string hex(uint64_t x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
+  return buf;
+}
+
 std::string root_checksum(const CheckpointHeader& h, int version,
                           const std::map<std::string, std::string>& datasets) {
   std::string text = std::string(kFormat) + '\n' + std::to_string(version) + '\n' + std::to_string(h.dim) +
@@ -117,10 +131,10 @@ std::string root_checksum(const CheckpointHeader& h, int version,
     x = fnv1a(name.c_str(), name.size() + 1, x);
     x = fnv1a(sum.data(), sum.size(), x);
   }
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(x));
-  return buf;
+  return hex(x);
 }
+
+namespace {
 
 herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) {
   auto* vd = static_cast<VisitData*>(data);
@@ -160,9 +174,16 @@ herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) 
     vd->error = std::string("cannot read '") + name + "'";
     return -1;
   }
-  // the checksum of the values read (a flipped bit in the data reads back without an HDF5 error)
+  // the checksum of the values read (a flipped bit in the data reads back without an HDF5 error):
+  // of the rows (written by every process of a run: checkpoint_internal.hpp) or of the bytes
   std::string sum;
-  if (cls == H5T_FLOAT) {
+  int width = 0;
+  if (h5::read_scalar_attr(d, kRowsAttr, H5T_NATIVE_INT, width) && width > 0 && cls != H5T_STRING) {
+    const void* p = cls == H5T_FLOAT ? static_cast<const void*>(vd->s->f64[name].data())
+                                     : static_cast<const void*>(vd->s->i64[name].data());
+    const size_t w = static_cast<size_t>(width);
+    sum = hex(rows_hash(p, static_cast<size_t>(n) / w, 8 * w, 0));
+  } else if (cls == H5T_FLOAT) {
     const auto& v = vd->s->f64[name];
     sum = values_checksum(v.data(), v.size() * sizeof(double));
   } else if (cls == H5T_INTEGER) {
@@ -187,6 +208,7 @@ herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) 
 }
 
 }  // namespace
+}  // namespace ckpt
 
 uint64_t fnv1a(const void* data, size_t bytes, uint64_t h) {
   const auto* p = static_cast<const unsigned char*>(data);
@@ -244,23 +266,14 @@ const std::string& StateArrays::string(const std::string& name) const {
 // ------------------------------------------------------------------------------------------------
 // write / read
 
-namespace {
+namespace ckpt {
 
-// One checkpoint being written: to `tmp`, then renamed to `path`.
-struct Writing {
-  const std::string& path;
-  const std::string& tmp;
-  bool kill_midway;  // test hook: kill the process when half of the datasets are written
+void Writing::fail(const std::string& what) const {
+  const std::string why = reason();
+  std::remove(tmp.c_str());
+  throw InputError("cannot write checkpoint '" + path + "': " + what + why);
+}
 
-  // Removes `tmp` and throws InputError naming `path`, with HDF5's reason.
-  [[noreturn]] void fail(const std::string& what) const {
-    const std::string why = reason();
-    std::remove(tmp.c_str());
-    throw InputError("cannot write checkpoint '" + path + "': " + what + why);
-  }
-};
-
-// The attributes of the root group (layout: checkpoint.hpp).
 void write_header(hid_t f, const CheckpointHeader& h, const std::string& path) {
   string_attr(f, "format", kFormat, path);
   scalar_attr<int>(f, "version", H5T_STD_I32LE, H5T_NATIVE_INT, kVersion, path);
@@ -275,8 +288,6 @@ void write_header(hid_t f, const CheckpointHeader& h, const std::string& path) {
   scalar_attr<long long>(f, "step", H5T_STD_I64LE, H5T_NATIVE_LLONG, h.step, path);
 }
 
-// One dataset per state entry, at its name (intermediate groups created): float64, int64, then
-// fixed-length string scalars; each with its checksum, also put into `sums` (by name).
 void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
                     std::map<std::string, std::string>& sums) {
   Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
@@ -313,6 +324,8 @@ void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
   }
 }
 
+namespace {
+
 // Writes the whole checkpoint to w.tmp; on failure w.tmp is removed.
 void write_tmp(const CheckpointHeader& h, const StateArrays& s, const Writing& w) {
   Id fapl = h5::file_access_without_locking();
@@ -331,7 +344,8 @@ void write_tmp(const CheckpointHeader& h, const StateArrays& s, const Writing& w
   if (H5Fclose(file.release()) < 0) w.fail("cannot close " + w.tmp + " (disk full?)");
 }
 
-// Syncs w.tmp, renames it over w.path and syncs the folder.
+}  // namespace
+
 void commit(const Writing& w) {
   try {
     fsync_path(w.tmp, false, w.path);
@@ -349,18 +363,23 @@ void commit(const Writing& w) {
   fsync_path(dir.empty() ? std::string(".") : dir.string(), true, w.path);
 }
 
-}  // namespace
+int next_checkpoint() {
+  static int count = 0;
+  return ++count;
+}
+
+}  // namespace ckpt
+
+using namespace ckpt;
 
 void write_checkpoint(const std::string& path, const CheckpointHeader& h, const StateArrays& s) {
-  static const KillHook hook;
-  static int count = 0;
-  ++count;
+  const int count = next_checkpoint();
   h5::silence();
   const std::string tmp = path + ".tmp";
-  const Writing w{path, tmp, hook.during == count};
+  const Writing w{path, tmp, kill_hook().during == count};
   write_tmp(h, s, w);
   commit(w);
-  if (hook.after == count) kill_now();
+  if (kill_hook().after == count) kill_now();
 }
 
 StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h) {
@@ -382,9 +401,9 @@ StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h) {
   int version = 0;
   if (!h5::read_string_attr(f, "format", format) || format != kFormat)
     throw InputError("restart file '" + path + "' is an HDF5 file but not an fdem checkpoint");
-  if (!h5::read_scalar_attr(f, "version", H5T_NATIVE_INT, version) || version != kVersion)
+  if (!h5::read_scalar_attr(f, "version", H5T_NATIVE_INT, version) || version < 3 || version > kVersion)
     throw InputError("restart file '" + path + "' is a checkpoint of format version " +
-                     std::to_string(version) + "; this fdem reads version " + std::to_string(kVersion) +
+                     std::to_string(version) + "; this fdem reads versions 3 to " + std::to_string(kVersion) +
                      (version > 0 && version < 3
                           ? " (earlier versions carry no checksum and are not accepted: start the run "
                             "again, or finish it with the fdem that wrote the checkpoint)"

@@ -10,8 +10,10 @@
 //      and checksum, in name order)
 //   one dataset per state entry, at its name ("model/x", "contact/pair_fn", "run/next_history",
 //   ...): float64 or int64, one-dimensional; strings as fixed-length string scalars. Each has the
-//   attribute checksum (FNV-1a 64 of its values' bytes, 16 hex digits).
+//   attribute checksum (FNV-1a 64 of its values' bytes, 16 hex digits), or, when every process of
+//   a run wrote its rows, the checksum of the rows with their width in checksum_rows (version 4).
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -57,6 +59,35 @@ uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 1469598103934665603u
 // FDEM_TEST_CHECKPOINT_KILL = "during:N" or "after:N" kills the process (SIGKILL) in the middle of
 // writing the N-th checkpoint of this process (half of the datasets written) or right after it.
 void write_checkpoint(const std::string& path, const CheckpointHeader& h, const StateArrays& s);
+
+// An entry of the whole run's state with one row per node or per interface (`blocks` blocks of
+// `whole_rows` rows of `width` values), of which this process holds the rows (*ids)[i], i < own:
+// values[(b * own + i) * width + c]. Integer entries are written as int64.
+struct RowPart {
+  std::string name;
+  bool integer = false;
+  long long whole_rows = 0;
+  int blocks = 1, width = 1;
+  const std::vector<int>* ids = nullptr;
+  size_t own = 0;
+  std::vector<double> values;
+};
+
+// What a checkpoint written by every process of a run needs of the processes.
+struct CheckpointProcesses {
+  long long fapl = -1;  // MPI-IO file access (Comm::h5_parallel_access); write_checkpoint_rows closes it
+  bool root = false;    // process 0: writes the header, the entries of `s` and the checksums
+  std::function<void(double*, int)> sum;  // in place over all processes, the same on each (Comm::sum)
+};
+
+// The same file as write_checkpoint, written by every process of a run (collective; an MPI build
+// with the parallel HDF5): each process writes its own rows of every entry in `rows` (the same
+// entries, in the same order, on every process) at their rows in the whole mesh; the checksums of
+// those rows (checkpoint_internal.hpp: rows_hash) are summed over the processes; then process 0
+// adds the header, every entry of its `s` (the others' is ignored) and the checksums, and renames
+// the file into place. No process holds another's rows.
+void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, const StateArrays& s,
+                           const std::vector<RowPart>& rows, const CheckpointProcesses& p);
 
 // Reads a checkpoint. Throws InputError naming `path` when it is missing, not HDF5, not a
 // checkpoint of this format version, or damaged: a dataset whose values fail their checksum (the

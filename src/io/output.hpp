@@ -119,6 +119,11 @@ class SnapshotWriter {
   // "interfaces" grid of every frame. Kept when the file already has them (restart).
   void add_interface_fields(const std::vector<std::string>& names, const std::vector<int>& material,
                             const std::vector<float>& strength);
+  // A run over several processes that writes its frames with ParallelFrames
+  // (src/io/snapshot_parallel.hpp): closes this handle (every frame opens the file on every
+  // process), then counts each frame written there and rewrites the XDMF.
+  void close_file();
+  void frame_written(double time, long step, bool fragment);
   int frames() const { return static_cast<int>(times_.size()); }
   const std::vector<long>& steps() const { return steps_; }
   const std::vector<double>& times() const { return times_; }
@@ -132,7 +137,8 @@ class SnapshotWriter {
   long long file_ = -1;  // hid_t
   std::vector<double> times_;
   std::vector<long> steps_;
-  bool has_fragment_ = false;
+  std::vector<char> fragment_;     // per frame: whether it has /fragment
+  bool imat_ = false, istrength_ = false;  // /mesh/interface_material, /mesh/strength_factor
 };
 
 }  // namespace fdem

@@ -235,7 +235,8 @@ SnapshotWriter::SnapshotWriter(const std::string& dir, const HostMesh& mesh,
   file_ = -1;
   times_.clear();
   steps_.clear();
-  has_fragment_ = false;
+  fragment_.clear();
+  imat_ = istrength_ = false;
   const fs::path h5 = fs::path(dir_) / kH5Name;
   std::error_code ec;
   if (fs::exists(h5, ec)) {
@@ -271,7 +272,9 @@ bool SnapshotWriter::reopen(const std::vector<long>& steps, const std::vector<do
   steps_ = steps;
   times_ = times;
   for (const auto& k : keep)
-    if (H5Lexists(file, ("/" + k + "/fragment").c_str(), H5P_DEFAULT) > 0) has_fragment_ = true;
+    fragment_.push_back(H5Lexists(file, ("/" + k + "/fragment").c_str(), H5P_DEFAULT) > 0);
+  imat_ = H5Lexists(file, "/mesh/interface_material", H5P_DEFAULT) > 0;
+  istrength_ = H5Lexists(file, "/mesh/strength_factor", H5P_DEFAULT) > 0;
   write_xdmf();
   return true;
 }
@@ -320,7 +323,22 @@ void SnapshotWriter::add_interface_fields(const std::vector<std::string>& names,
     const std::vector<double> w(strength.begin(), strength.end());
     write_doubles(g.get(), "strength_factor", {n}, w.data(), path);
   }
+  imat_ = true;
+  istrength_ = !strength.empty();
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush");
+  write_xdmf();
+}
+
+void SnapshotWriter::close_file() {
+  if (file_ >= 0) H5Fclose(static_cast<hid_t>(file_));
+  file_ = -1;
+}
+
+void SnapshotWriter::frame_written(double time, long step, bool fragment) {
+  if (file_ >= 0) throw std::logic_error("SnapshotWriter::frame_written: the file is still open here");
+  times_.push_back(time);
+  steps_.push_back(step);
+  fragment_.push_back(fragment);
   write_xdmf();
 }
 
@@ -377,10 +395,10 @@ void SnapshotWriter::write(const SnapshotFrame& fr) {
     write_doubles(g.get(), "damage", {static_cast<hsize_t>(ni_)}, damage.data(), path);
     if (fr.fragment) {
       write_ints(g.get(), "fragment", {he}, fr.fragment, path);
-      has_fragment_ = true;
     }
   }
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush after " + gname);
+  fragment_.push_back(fr.fragment != nullptr);
   times_.push_back(fr.time);
   steps_.push_back(fr.step);
   write_xdmf();

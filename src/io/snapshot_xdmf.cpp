@@ -1,7 +1,6 @@
 // SnapshotWriter::write_xdmf: snapshots.xdmf (XDMF 3), a temporal collection of the frames in
 // snapshots.h5 (layout: src/io/snapshot_writer.cpp), each a spatial collection of the grids "bulk"
 // and "interfaces".
-#include <hdf5.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -94,15 +93,14 @@ void interface_grid(std::ostringstream& o, const Frame& f) {
 }  // namespace
 
 void SnapshotWriter::write_xdmf() const {
-  const hid_t file = static_cast<hid_t>(file_);
   Frame fr;
   fr.dim = dim_;
   fr.nn = std::to_string(nn_);
   fr.ne = std::to_string(ne_);
   fr.ni = std::to_string(ni_);
   fr.npe = std::to_string(dim_ + 1);
-  fr.imat = H5Lexists(file, "/mesh/interface_material", H5P_DEFAULT) > 0;
-  fr.istrength = H5Lexists(file, "/mesh/strength_factor", H5P_DEFAULT) > 0;
+  fr.imat = imat_;
+  fr.istrength = istrength_;
 
   std::ostringstream o;
   o << "<?xml version=\"1.0\" ?>\n"
@@ -114,7 +112,7 @@ void SnapshotWriter::write_xdmf() const {
     fr.t = fmt_double(times_[f]);
     fr.geom = "          <Geometry GeometryType=\"XYZ\">\n            " +
               item(fr.nn + " 3", false, fr.g + "/coordinates") + "\n          </Geometry>\n";
-    fr.frag = H5Lexists(file, (fr.g + "/fragment").c_str(), H5P_DEFAULT) > 0;
+    fr.frag = f < fragment_.size() && fragment_[f];
     o << "      <Grid Name=\"" << step_name(steps_[f])
       << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n"
       << "        <Time Value=\"" << fr.t << "\"/>\n";

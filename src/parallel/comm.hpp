@@ -34,6 +34,10 @@ class Comm {
   // From process 0 (parts: one buffer per process, consumed) to each process its own, into
   // `mine` (process 0's own too).
   virtual void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const = 0;
+  // An HDF5 file access property list (hid_t) for opening one file on every process with MPI-IO,
+  // which the caller closes; -1 when the build's HDF5 is not parallel (the frames are then gathered
+  // on process 0: src/solver/run_output.cpp). Collective: every process calls it.
+  virtual long long h5_parallel_access() const { return -1; }
   // Whether the MPI passes device buffers without host copies (CUDA-aware); "" when unknown.
   virtual std::string gpu_aware() const = 0;
   // Ends every process of the run now (after an error on one of them: the others would wait for it).

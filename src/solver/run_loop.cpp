@@ -232,9 +232,10 @@ void RunLoop<D>::final_row() {
 }
 
 template <int D>
-bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long written) {
-  if (sim_.comm()) {  // the whole run's state on process 0
-    sim_.save_state_whole(st);
+bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long written,
+                               std::vector<RowPart>* rows) {
+  if (sim_.comm()) {  // the whole run's state on process 0 (the per-row entries: `rows`, each its own)
+    sim_.save_state_whole(st, rows);
     if (!writes_) return false;
     st.put_int("processes/contact_recuts", opt_.recuts);  // (how a restart cuts its parts: run.cpp)
     st.put_int("processes/rebalances", opt_.rebalances);
@@ -306,8 +307,11 @@ template <int D>
 void RunLoop<D>::save_checkpoint() {
   const auto c0 = Clock::now();
   StateArrays st;
-  if (!collect_state(st, c0, ckpt_written_ + 1)) {  // (process 0 writes the one file)
-    ++ckpt_written_;
+  std::vector<RowPart> rows;  // with the parallel HDF5: this process's rows, which it writes
+  const Comm* comm = sim_.comm();
+  const long long fapl = comm && !gather_outputs() ? comm->h5_parallel_access() : -1;  // (collective)
+  if (!collect_state(st, c0, ckpt_written_ + 1, fapl >= 0 ? &rows : nullptr) && fapl < 0) {
+    ++ckpt_written_;  // (process 0 writes the one file)
     ckpt_wall_ += seconds(Clock::now() - c0);
     return;
   }
@@ -320,7 +324,11 @@ void RunLoop<D>::save_checkpoint() {
   h.mesh_hash = id_.mesh_hash;
   h.time = sim_.t;
   h.step = sim_.step_count;
-  write_checkpoint(out_ + "/checkpoint.h5", h, st);
+  if (fapl >= 0)
+    write_checkpoint_rows(out_ + "/checkpoint.h5", h, st, rows,
+                          {fapl, writes_, [comm](double* v, int n) { comm->sum(v, n); }});
+  else
+    write_checkpoint(out_ + "/checkpoint.h5", h, st);
   ++ckpt_written_;
   ckpt_wall_ += seconds(Clock::now() - c0);
 }

@@ -46,7 +46,9 @@ class RunLoop {
   void save_checkpoint();
   // The whole run's state (simulation and run loop) into st; over several processes on process 0
   // only (false elsewhere: it holds nothing). written: the checkpoints written with this one.
-  bool collect_state(StateArrays& st, Clock::time_point c0, long written);
+  // rows: see Simulation::save_state_whole.
+  bool collect_state(StateArrays& st, Clock::time_point c0, long written,
+                     std::vector<RowPart>* rows = nullptr);
   // The parts are to be cut anew (Simulation::recut_due): the whole state to opt.recut; returns
   // {"recut": true} instead of a summary (run_case goes on with the new parts).
   nlohmann::json recut();

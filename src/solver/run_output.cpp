@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
 
 #include "common/error.hpp"
 #include "solver/fragment_bodies.hpp"
@@ -230,7 +232,8 @@ nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
 
 template <int D>
 RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh,
-                              const RunState* restart, bool writes) {
+                              const RunState* restart, bool writes)
+    : out_(out) {
   if (restart) last_step_ = static_cast<long>(restart->last_snapshot_step);
   if (!(c.snapshot_interval > 0)) return;
   if (!writes) {
@@ -253,12 +256,59 @@ RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostM
   }
 }
 
+bool gather_outputs() {
+  const char* g = std::getenv("FDEM_GATHER_OUTPUT");
+  return g && std::string(g) == "1";
+}
+
+template <int D>
+bool RunSnapshots<D>::parallel(const Simulation<D>& sim) {
+  if (parallel_ >= 0) return parallel_ == 1;
+  parallel_ = 0;
+  const Comm* comm = sim.comm();
+  if (!comm) return false;
+  if (gather_outputs()) return false;
+  const long long fapl = comm->h5_parallel_access();  // (collective)
+  if (fapl < 0) return false;
+  frames_ = std::make_unique<ParallelFrames>(fapl);
+  parallel_ = 1;
+  return true;
+}
+
 template <int D>
 void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   if ((!writer_ && !gathers_) || sim.step_count == last_step_) return;
   last_step_ = sim.step_count;
-  sim.download(x_, u_, v_, stress_, damage_);  // over several processes: gathered on process 0
-  if (frag) frag->element_ids(sim, fragment_);   // likewise
+  const bool own_rows = parallel(sim);
+  sim.download(x_, u_, v_, stress_, damage_, !own_rows);  // else gathered on process 0
+  if (frag) frag->element_ids(sim, fragment_);  // (over several processes: on process 0)
+  if (own_rows) {
+    if (writer_) writer_->close_file();  // (after its /mesh; a no-op from the second frame on)
+    const auto w = sim.whole_rows();
+    FramePart p;
+    p.time = sim.t;
+    p.step = sim.step_count;
+    p.dim = D;
+    p.whole_nodes = w.nn;
+    p.whole_elems = w.ne;
+    p.whole_ifaces = w.ni;
+    p.node_ids = w.nodes.data();
+    p.elem_ids = w.elems.data();
+    p.iface_ids = w.ifaces.data();
+    p.nodes = static_cast<size_t>(sim.m.owned_nodes());
+    p.elems = static_cast<size_t>(sim.m.owned_elems());
+    p.ifaces = static_cast<size_t>(sim.m.owned_ifaces());
+    p.x = x_.data();
+    p.u = u_.data();
+    p.v = v_.data();
+    p.stress = stress_.data();
+    p.damage = damage_.data();
+    p.has_fragment = frag != nullptr;
+    p.fragment = frag && writer_ ? fragment_.data() : nullptr;
+    frames_->write(out_, p);
+    if (writer_) writer_->frame_written(sim.t, sim.step_count, frag != nullptr);
+    return;
+  }
   if (!writer_) return;
   SnapshotFrame fr;
   fr.time = sim.t;

@@ -9,6 +9,7 @@
 
 #include "io/case.hpp"
 #include "io/output.hpp"
+#include "io/snapshot_parallel.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/fragment_analysis.hpp"
 #include "solver/run_state.hpp"
@@ -88,6 +89,11 @@ class RunFragments {
   long step_ = -1;  // the step the statistics are of
 };
 
+// FDEM_GATHER_OUTPUT=1 (given to every process: mpirun -x): the snapshots and checkpoints of a run
+// over several processes are gathered on process 0 and written there even with the parallel HDF5,
+// to measure one way against the other (docs/parallel.md, "Output").
+bool gather_outputs();
+
 // Snapshots (when the case asks for them): out/snapshots.h5 + .xdmf, one frame per step at most.
 template <int D>
 class RunSnapshots {
@@ -105,8 +111,14 @@ class RunSnapshots {
   void save(RunState& s) const;
 
  private:
+  // Over several processes: each writes its own rows (parallel HDF5) or they are gathered on
+  // process 0, which writes them (serial HDF5). Decided at the first frame.
+  bool parallel(const Simulation<D>& sim);
   std::unique_ptr<SnapshotWriter> writer_;
   bool gathers_ = false;  // takes part in the frames without writing them
+  int parallel_ = -1;     // -1: not decided yet; 0: gathered on process 0; 1: ParallelFrames
+  std::unique_ptr<ParallelFrames> frames_;
+  std::string out_;
   long last_step_ = -1;
   std::vector<double> x_, u_, v_, stress_, damage_;
   std::vector<int> fragment_;

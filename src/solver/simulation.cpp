@@ -353,7 +353,7 @@ double Simulation<D>::platen_displacement(int p, double at) const {
 
 template <int D>
 void Simulation<D>::download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
-                             std::vector<double>& stress, std::vector<double>& damage) {
+                             std::vector<double>& stress, std::vector<double>& damage, bool gather) {
   auto x_h = Kokkos::create_mirror_view(m.x);
   auto X_h = Kokkos::create_mirror_view(m.X);
   auto v_h = Kokkos::create_mirror_view(m.v);
@@ -381,7 +381,7 @@ void Simulation<D>::download(std::vector<double>& x, std::vector<double>& u, std
   auto d_h = Kokkos::create_mirror_view(d);
   Kokkos::deep_copy(d_h, d);
   damage.assign(d_h.data(), d_h.data() + m.ni);
-  if (comm_) gather_whole(x, u, v, stress, damage);
+  if (comm_ && gather) gather_whole(x, u, v, stress, damage);
 }
 
 std::vector<double> energies_to_vector(const Energies& e) {

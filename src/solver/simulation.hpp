@@ -140,8 +140,19 @@ class Simulation {
   // Host copies for snapshots. Over several processes (set_decomposition) every process must call
   // it: the own items are gathered into the whole mesh's order on process 0, whose arrays are then
   // the whole run's; the others' are left empty.
+  // gather = false: every process keeps its own rows (the first m.owned_*() of each array; see
+  // whole_rows()), for each to write them itself (src/io/snapshot_parallel.hpp).
   void download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
-                std::vector<double>& stress, std::vector<double>& damage);
+                std::vector<double>& stress, std::vector<double>& damage, bool gather = true);
+  // Over several processes: the whole mesh's index of each local node, element and interface (own
+  // ones first), and the whole mesh's counts of each.
+  struct WholeRows {
+    const std::vector<int>&nodes, &elems, &ifaces;
+    long nn, ne, ni;
+  };
+  WholeRows whole_rows() const {
+    return {node_global_, elem_global_, iface_global_, whole_nn_, whole_ne_, whole_ni_};
+  }
 
   // Contact between bodies and fragments (null when the case has it off; see solver/contact_system.hpp).
   ContactSystem<D>* contact() { return contact_.get(); }
@@ -176,8 +187,10 @@ class Simulation {
   // under "processes/", so that a restart on as many processes goes on to the bit). load_state_whole
   // takes such a state (or one process's checkpoint) on any number of processes: each picks the
   // rows of its own and ghost items; the accumulators go back to their processes, or all to
-  // process 0 on another count.
-  void save_state_whole(StateArrays& whole) const;
+  // process 0 on another count. With `rows`, the per-node and per-interface entries are not
+  // gathered: each process gets its own rows of them there, for every process to write its own
+  // (write_checkpoint_rows, src/io/checkpoint.hpp); process 0's `whole` holds the rest.
+  void save_state_whole(StateArrays& whole, std::vector<RowPart>* rows = nullptr) const;
   void load_state_whole(const StateArrays& whole);
 
   const std::vector<std::string>& platen_names() const { return platen_names_; }

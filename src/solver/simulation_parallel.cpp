@@ -217,7 +217,7 @@ void put_entry(StateArrays& s, const std::string& name, const std::vector<double
 }  // namespace
 
 template <int D>
-void Simulation<D>::save_state_whole(StateArrays& whole) const {
+void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* rows) const {
   StateArrays local;
   save_state(local);
   const bool root = comm_->rank() == 0;
@@ -235,6 +235,22 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     if (v.size() != blocks * n * w)
       throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
                        " values, not " + std::to_string(blocks * n * w));
+    if (rows) {  // each process writes its own rows (io/checkpoint.hpp: write_checkpoint_rows)
+      RowPart r;
+      r.name = e.name;
+      r.integer = integer;
+      r.whole_rows = e.nodes ? whole_nn_ : whole_ni_;
+      r.blocks = e.blocks;
+      r.width = e.width;
+      r.ids = e.nodes ? &node_global_ : &iface_global_;
+      r.own = own;
+      for (size_t b = 0; b < blocks; ++b)
+        r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+      rows->push_back(std::move(r));
+      whole.f64.erase(e.name);
+      whole.i64.erase(e.name);
+      continue;
+    }
     std::vector<double> out;
     for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
       const std::vector<double> rows = gather_rows(*comm_, v.data() + b * n * w, own, w,
@@ -266,8 +282,19 @@ void Simulation<D>::save_state_whole(StateArrays& whole) const {
     std::vector<double> own(xc.extent(0) * D);
     for (size_t i = 0; i < xc.extent(0); ++i)
       for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);
-    std::vector<double> cut = gather_rows(*comm_, own.data(), xc.extent(0), D, node_global_, whole_nn_);
-    if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
+    if (rows) {
+      RowPart r;
+      r.name = kProcessesPrefix + "cut_x";
+      r.whole_rows = whole_nn_;
+      r.width = D;
+      r.ids = &node_global_;
+      r.own = xc.extent(0);
+      r.values = std::move(own);
+      rows->push_back(std::move(r));
+    } else {
+      std::vector<double> cut = gather_rows(*comm_, own.data(), xc.extent(0), D, node_global_, whole_nn_);
+      if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
+    }
   }
 }
 
@@ -470,7 +497,7 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
   template void Simulation<D>::exchange_ghosts();                                              \
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
-  template void Simulation<D>::save_state_whole(StateArrays&) const;                           \
+  template void Simulation<D>::save_state_whole(StateArrays&, std::vector<RowPart>*) const;   \
   template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
   template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \
   template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \

@@ -51,13 +51,14 @@ import sys
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 WORK = os.path.join(ROOT, "build", "mpi-check")
 COMMON = ['contact={"enabled": false}']
+PARALLEL_HDF5 = False  # each process writes its rows of the snapshots and checkpoints (fdem info; main)
 CASES = {
     # the Brazilian disc, coarse and loaded fast from contact: intact, first damage near step 250,
     # the peak near step 900
     "disc": ("cases/brazilian_disc/case.json",
              COMMON + ["mesh.element_size=0.006", "parameters.gap=0", "parameters.approach_rate=4",
-                       "parameters.approach=0.0004", "time.max_steps=1100", "output.history_rows=40000",
-                       "output.snapshot_count=30"],
+                       "parameters.approach=0.0004", "time.max_steps=1100",
+                       'output={"history_rows": 40000, "snapshot_interval": 1.5e-5}'],
              ["top_load [N]", "bottom_load [N]"], 1e-9, 1e-9),
     # the 3D impact, coarse: the sphere hits the plate and cracks (about 1 500 damaged interfaces);
     # monitors: the mean displacement of all nodes and of the surface's (sums over the processes)
@@ -148,6 +149,31 @@ def same_file(a, b):
         return False
 
 
+def same_checkpoints(a, b):
+    """Whether two checkpoint.h5 hold the same datasets with the same bits (but the wall times), the
+    same header; and the entries whose checksum is of rows (written by every process)."""
+    import h5py
+    with h5py.File(a, "r") as fa, h5py.File(b, "r") as fb:
+        names = {}
+        for f, key in ((fa, "a"), (fb, "b")):
+            got = []
+            f.visit(lambda n, f=f, got=got: got.append(n) if isinstance(f[n], h5py.Dataset) else None)
+            names[key] = sorted(got)
+        if names["a"] != names["b"]:
+            return False, f"other datasets: {set(names['a']) ^ set(names['b'])}", []
+        for k in ("format", "version", "dimension", "num_nodes", "num_interfaces", "time", "step"):
+            if fa.attrs[k] != fb.attrs[k]:
+                return False, f"header {k}", []
+        for n in names["a"]:
+            if n.endswith("wall_seconds"):
+                continue
+            x, y = fa[n][()], fb[n][()]
+            if (x.tobytes() if hasattr(x, "tobytes") else x) != (y.tobytes() if hasattr(y, "tobytes") else y):
+                return False, f"{n} differs", []
+        rows = [n for n in names["a"] if "checksum_rows" in fa[n].attrs]
+        return True, f"{len(names['a'])} datasets", rows
+
+
 def check_restarts(fdem, name, ck, after_tol=None):
     """A case's checkpoints over processes (its runs on 1-4 processes are there already): ck is the
     checkpoint interval that writes one checkpoint in the run."""
@@ -162,9 +188,24 @@ def check_restarts(fdem, name, ck, after_tol=None):
             print(r.stderr[-3000:])
         check(same_file(os.path.join(out, "history.csv"), os.path.join(WORK, f"{name}-{n}", "history.csv")),
               f"{name} on {n} process(es): writing the checkpoint changes no bit of history.csv")
+    if PARALLEL_HDF5:  # every process wrote its rows: the same file as gathered on process 0
+        out = os.path.join(WORK, f"{name}-ck2-gathered")
+        r = run(fdem, 2, case, sets + ck, out, env={"FDEM_GATHER_OUTPUT": "1"})
+        ok, what, rows = False, f"exit {r.returncode}", []
+        if r.returncode == 0:
+            ok, what, rows = same_checkpoints(os.path.join(WORK, f"{name}-ck2", "checkpoint.h5"),
+                                              os.path.join(out, "checkpoint.h5"))
+        check(ok and "model/x" in rows and "model/ihist" in rows,
+              f"{name} on 2 processes: checkpoint.h5 written by every process (its rows of {len(rows)} "
+              f"entries: {', '.join(rows[:3])}, ...) the same bits as gathered on process 0 ({what}; the "
+              f"wall times aside)")
     for src, n in ((2, 2), (2, 3), (2, 1), (1, 4)):
         out = os.path.join(WORK, f"{name}-restart{src}-{n}")
-        r = run(fdem, n, case, sets, out, extra=["--restart", os.path.join(WORK, f"{name}-ck{src}", "checkpoint.h5")])
+        ck = os.path.join(WORK, f"{name}-ck{src}")
+        if src == n:  # in a copy of the checkpointed run's folder: its files are continued
+            shutil.copytree(ck, out)
+            ck = out
+        r = run(fdem, n, case, sets, out, extra=["--restart", os.path.join(ck, "checkpoint.h5")])
         check(r.returncode == 0, f"{name}, checkpoint of {src} process(es) restarted on {n}: exit {r.returncode}")
         if r.returncode != 0:
             print(r.stderr[-3000:])
@@ -174,6 +215,12 @@ def check_restarts(fdem, name, ck, after_tol=None):
                 check(same_file(os.path.join(out, f), os.path.join(WORK, f"{name}-{n}", f)),
                       f"{name}, checkpoint of {src} processes restarted on {n}: {f} the same byte for byte as the "
                       f"run that did not stop")
+            if os.path.exists(os.path.join(out, "snapshots.h5")):
+                ok, what = same_frames(out, os.path.join(WORK, f"{name}-{n}"))
+                check(ok, f"{name}, checkpoint of {src} processes restarted on {n} in its folder: "
+                      f"snapshots.h5 (the frames up to the checkpoint kept, the later ones written again "
+                      f"by every process) and snapshots.xdmf the same bits as the run's that did not stop "
+                      f"({what})")
         else:
             compare(f"{name} restarted ({src} -> {n})", cols_main, peak_tol, intact_tol, base,
                     history(os.path.join(out, "history.csv")), n, after_tol)
@@ -449,8 +496,33 @@ def last_frame(out):
         return last, f[last]["coordinates"][()], f[last]["damage"][()], f["mesh/reference_coordinates"][()]
 
 
+def same_frames(a, b):
+    """Whether two snapshots.h5 hold the same frames with the same bits in every dataset and
+    attribute, and their snapshots.xdmf the same bytes; and what differs."""
+    import h5py
+    import numpy as np
+    pa, pb = (os.path.join(d, "snapshots.h5") for d in (a, b))
+    if not (os.path.exists(pa) and os.path.exists(pb)):
+        return False, "a snapshots.h5 is missing"
+    if not same_file(os.path.join(a, "snapshots.xdmf"), os.path.join(b, "snapshots.xdmf")):
+        return False, "snapshots.xdmf differ"
+    with h5py.File(pa, "r") as fa, h5py.File(pb, "r") as fb:
+        names = sorted(k for k in fa.keys() if k.startswith("step_"))
+        if not names or names != sorted(k for k in fb.keys() if k.startswith("step_")):
+            return False, "other frames"
+        for g in names:
+            if set(fa[g].keys()) != set(fb[g].keys()) or dict(fa[g].attrs) != dict(fb[g].attrs):
+                return False, f"{g}: other datasets or attributes"
+            for d in fa[g]:
+                x, y = fa[g][d][()], fb[g][d][()]
+                if x.shape != y.shape or x.dtype != y.dtype or x.tobytes() != y.tobytes():
+                    return False, f"{g}/{d} differs"
+        return True, f"{len(names)} frames"
+
+
 def compare_frames(name, a, b, n):
-    check(b is not None and a[0] == b[0], f"{name}, {n} processes: snapshots.h5 written by process 0, last frame {b and b[0]}")
+    check(b is not None and a[0] == b[0],
+          f"{name}, {n} processes: snapshots.h5 written, last frame {b and b[0]}")
     if b is None or a[0] != b[0]:
         return
     import numpy as np
@@ -511,6 +583,8 @@ def main():
     info = subprocess.run([fdem, "info"], capture_output=True, text=True)
     mpi_line = next((l for l in info.stdout.splitlines() if l.startswith("MPI:")), "")
     print(mpi_line)
+    global PARALLEL_HDF5
+    PARALLEL_HDF5 = "parallel HDF5" in mpi_line
     check("processes" in mpi_line and "not in this build" not in mpi_line, "fdem info names the MPI")
     for name, (case, sets, cols_main, peak_tol, intact_tol) in CASES.items():
         print(f"{name}: {case}")
@@ -535,6 +609,14 @@ def main():
                 check(p.get("count") == n and p.get("exchange_bytes_per_step", 0) > 0,
                       f"{name}, {n} processes: summary.json processes {p.get('count')}, "
                       f"{p.get('exchange_bytes_per_step', 0):.0f} bytes exchanged per step")
+        if PARALLEL_HDF5 and frames.get(3) is not None:
+            # each process wrote its rows into the one file: the same bits as gathered on process 0
+            out = os.path.join(WORK, f"{name}-3-gathered")
+            r = run(fdem, 3, case, sets, out, env={"FDEM_GATHER_OUTPUT": "1"})
+            ok, what = same_frames(os.path.join(WORK, f"{name}-3"), out)
+            check(r.returncode == 0 and ok, f"{name}, 3 processes: snapshots.h5 written by every process "
+                  f"holds the same bits as gathered on process 0 and written there ({what}); the XDMF the "
+                  f"same bytes")
         for n in (2, 3, 4):
             if 1 in outs and n in outs:
                 compare(name, cols_main, peak_tol, intact_tol, outs[1], outs[n], n)

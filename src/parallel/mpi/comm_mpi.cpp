@@ -4,6 +4,9 @@
 #if __has_include(<mpi-ext.h>)
 #include <mpi-ext.h>  // Open MPI's MPIX_Query_cuda_support
 #endif
+#ifdef FDEM_PARALLEL_HDF5
+#include <hdf5.h>  // H5Pset_fapl_mpio
+#endif
 
 #include <algorithm>
 #include <chrono>
@@ -113,6 +116,19 @@ class MpiComm final : public Comm {
       MPI_Recv(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, 0, kTag + 1, MPI_COMM_WORLD,
                MPI_STATUS_IGNORE);
   }
+  long long h5_parallel_access() const override {
+#ifdef FDEM_PARALLEL_HDF5
+    const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl < 0) return -1;
+    if (H5Pset_fapl_mpio(fapl, MPI_COMM_WORLD, MPI_INFO_NULL) < 0) {
+      H5Pclose(fapl);
+      return -1;
+    }
+    return fapl;
+#else
+    return -1;
+#endif
+  }
   std::string gpu_aware() const override {
     if (Kokkos::SpaceAccessibility<Kokkos::HostSpace, Kokkos::View<double*>::memory_space>::accessible)
       return "not needed (host backend)";
@@ -156,7 +172,13 @@ std::string mpi_description(const Comm& comm) {
   std::string v(version);  // up to its terminating zero
   if (const auto nl = v.find_first_of("\r\n"); nl != std::string::npos) v.resize(nl);
   while (!v.empty() && (v.back() == ',' || v.back() == ' ')) v.pop_back();
-  return v + "; processes: " + std::to_string(comm.size()) + "; GPU-aware: " + comm.gpu_aware();
+#ifdef FDEM_PARALLEL_HDF5
+  const char* snapshots = "every process writes its rows (parallel HDF5)";
+#else
+  const char* snapshots = "gathered on process 0 (serial HDF5)";
+#endif
+  return v + "; processes: " + std::to_string(comm.size()) + "; GPU-aware: " + comm.gpu_aware() +
+         "; snapshots and checkpoints: " + snapshots;
 }
 
 }  // namespace fdem

@@ -1,0 +1,173 @@
+// write_checkpoint_rows: a checkpoint written by every process of a run (src/io/checkpoint.hpp).
+// First all processes create CHECKPOINT.tmp with MPI-IO and write their own rows of each per-row
+// entry (their rows selected as runs of consecutive whole-mesh indices, one collective write per
+// entry); the rows' checksums are summed over the processes; then process 0 alone reopens the file,
+// adds the header, its entries and every checksum, syncs it and renames it over CHECKPOINT (as
+// write_checkpoint does), so a reader sees the old checkpoint or the new one, never part of it.
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <map>
+#include <numeric>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "io/checkpoint.hpp"
+#include "io/checkpoint_internal.hpp"
+#include "io/hdf5_util.hpp"
+
+namespace fdem {
+
+using namespace ckpt;
+using h5::Id;
+
+namespace {
+
+// This process's rows of one entry: the file's value positions (runs over every block) and the
+// values in that order; the sum of their rows' hashes.
+struct OwnRows {
+  std::vector<std::pair<hsize_t, hsize_t>> runs;  // (first value, count of values)
+  std::vector<double> f64;
+  std::vector<long long> i64;
+  uint64_t hash = 0;
+};
+
+OwnRows own_rows(const RowPart& r) {
+  OwnRows o;
+  const size_t w = static_cast<size_t>(r.width);
+  std::vector<size_t> order(r.own);
+  std::iota(order.begin(), order.end(), size_t{0});
+  const std::vector<int>& ids = *r.ids;
+  std::sort(order.begin(), order.end(), [&ids](size_t a, size_t b) { return ids[a] < ids[b]; });
+  for (int b = 0; b < r.blocks; ++b) {
+    for (size_t k = 0; k < order.size(); ++k) {
+      const size_t i = order[k];
+      const uint64_t row = static_cast<uint64_t>(b) * static_cast<uint64_t>(r.whole_rows) +
+                           static_cast<uint64_t>(ids[i]);
+      const double* v = &r.values[(static_cast<size_t>(b) * r.own + i) * w];
+      const hsize_t first = static_cast<hsize_t>(row * w);
+      if (!o.runs.empty() && o.runs.back().first + o.runs.back().second == first)
+        o.runs.back().second += w;
+      else
+        o.runs.emplace_back(first, w);
+      if (r.integer) {
+        for (size_t c = 0; c < w; ++c) o.i64.push_back(static_cast<long long>(v[c]));
+        o.hash += rows_hash(&o.i64[o.i64.size() - w], 1, 8 * w, row);
+      } else {
+        o.f64.insert(o.f64.end(), v, v + w);
+        o.hash += rows_hash(v, 1, 8 * w, row);
+      }
+    }
+  }
+  return o;
+}
+
+// Every process: CHECKPOINT.tmp with the row entries, each process's rows written; returns the
+// sums of the rows' hashes of this process, per entry.
+std::vector<uint64_t> write_rows(const std::vector<RowPart>& rows, const CheckpointProcesses& p,
+                                 const Writing& w) {
+  Id fapl(H5Pcopy(static_cast<hid_t>(p.fapl)), H5Pclose);
+#if H5_VERSION_GE(1, 10, 7)
+  if (fapl.ok()) H5Pset_file_locking(fapl.get(), 0, 1);
+#endif
+  Id file(H5Fcreate(w.tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose);
+  if (!file.ok()) w.fail("cannot create " + w.tmp + " on every process (MPI-IO)");
+  Id dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
+  Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!dxpl.ok() || !lcpl.ok() || !dcpl.ok() || H5Pset_create_intermediate_group(lcpl.get(), 1) < 0 ||
+      H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
+      H5Pset_alloc_time(dcpl.get(), H5D_ALLOC_TIME_EARLY) < 0)
+    w.fail("cannot create property lists");
+#ifdef H5_HAVE_PARALLEL
+  if (H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE) < 0) w.fail("cannot ask for collective writes");
+#endif
+  std::vector<uint64_t> hashes;
+  for (const RowPart& r : rows) {
+    const OwnRows o = own_rows(r);
+    hashes.push_back(o.hash);
+    const hsize_t n = static_cast<hsize_t>(r.blocks) * static_cast<hsize_t>(r.whole_rows) *
+                      static_cast<hsize_t>(r.width);
+    Id fspace(H5Screate_simple(1, &n, nullptr), H5Sclose);
+    Id d(H5Dcreate2(file.get(), r.name.c_str(), r.integer ? H5T_STD_I64LE : H5T_IEEE_F64LE, fspace.get(),
+                    lcpl.get(), dcpl.get(), H5P_DEFAULT),
+         H5Dclose);
+    if (!fspace.ok() || !d.ok()) w.fail("cannot create dataset '" + r.name + "'");
+    bool ok = H5Sselect_none(fspace.get()) >= 0;
+    for (const auto& [first, count] : o.runs) {
+      const hsize_t start[1] = {first}, cnt[1] = {count};
+      ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, cnt, nullptr) >= 0;
+    }
+    const hsize_t m = r.integer ? o.i64.size() : o.f64.size();
+    const hsize_t mdim = std::max<hsize_t>(m, 1);
+    Id mspace(H5Screate_simple(1, &mdim, nullptr), H5Sclose);
+    ok = ok && mspace.ok() && (m > 0 || H5Sselect_none(mspace.get()) >= 0);
+    if (!ok) w.fail("cannot select this process's rows of '" + r.name + "'");
+    static const long long none = 0;
+    const void* data = m == 0      ? static_cast<const void*>(&none)
+                       : r.integer ? static_cast<const void*>(o.i64.data())
+                                   : static_cast<const void*>(o.f64.data());
+    const hid_t type = r.integer ? H5T_NATIVE_LLONG : H5T_NATIVE_DOUBLE;
+    if (H5Dwrite(d.get(), type, mspace.get(), fspace.get(), dxpl.get(), data) < 0)
+      w.fail("cannot write this process's rows of '" + r.name + "'");
+  }
+  if (H5Fclose(file.release()) < 0) w.fail("cannot close " + w.tmp + " (disk full?)");
+  return hashes;
+}
+
+}  // namespace
+
+void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, const StateArrays& s,
+                           const std::vector<RowPart>& rows, const CheckpointProcesses& p) {
+  Id access(static_cast<hid_t>(p.fapl), H5Pclose);  // (closed here)
+  const int count = next_checkpoint();
+  h5::silence();
+  const std::string tmp = path + ".tmp";
+  const Writing w{path, tmp, p.root && kill_hook().during == count};
+  const std::vector<uint64_t> mine = write_rows(rows, p, w);
+  // the sums over the processes, exact: each 64-bit sum as two 32-bit halves in doubles
+  std::vector<double> halves;
+  for (uint64_t x : mine) {
+    halves.push_back(static_cast<double>(x >> 32));
+    halves.push_back(static_cast<double>(x & 0xffffffffull));
+  }
+  p.sum(halves.data(), static_cast<int>(halves.size()));
+  if (!p.root) return;
+
+  Id fapl = h5::file_access_without_locking();
+  Id file(H5Fopen(tmp.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+  if (!file.ok()) w.fail("cannot reopen " + tmp);
+  try {
+    write_header(file.get(), h, path);
+    std::map<std::string, std::string> sums;
+    for (size_t k = 0; k < rows.size(); ++k) {
+      const uint64_t total =
+          (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+      const std::string& name = rows[k].name;
+      Id d(H5Dopen2(file.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
+      if (!d.ok()) w.fail("cannot open dataset '" + name + "'");
+      sums[name] = hex(total);
+      string_attr(d.get(), kChecksum, sums[name], path);
+      h5::write_scalar_attr<int>(d.get(), kRowsAttr, H5T_STD_I32LE, H5T_NATIVE_INT, rows[k].width, path);
+    }
+    StateArrays rest = s;  // (an entry of the rows is the rows')
+    for (const RowPart& r : rows) {
+      rest.f64.erase(r.name);
+      rest.i64.erase(r.name);
+    }
+    write_datasets(file.get(), rest, w, sums);
+    string_attr(file.get(), kChecksum, root_checksum(h, kVersion, sums), path);
+  } catch (...) {
+    H5Fclose(file.release());
+    std::remove(tmp.c_str());
+    throw;
+  }
+  if (H5Fclose(file.release()) < 0) w.fail("cannot close " + tmp + " (disk full?)");
+  commit(w);
+  if (kill_hook().after == count) kill_now();
+}
+
+}  // namespace fdem

@@ -1,0 +1,164 @@
+// ParallelFrames: one snapshot frame written by every process into snapshots.h5 with MPI-IO
+// (src/io/snapshot_parallel.hpp). Each dataset is created by all processes with the whole mesh's
+// shape; each process selects the rows of its own items (sorted by their whole-mesh index, as runs
+// of consecutive rows) and all write together. Every row has one owner, so every row is written
+// once and no fill values are written.
+#include "io/snapshot_parallel.hpp"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+#include <utility>
+#include <vector>
+
+#include "io/hdf5_util.hpp"
+#include "io/snapshot_internal.hpp"
+
+namespace fdem {
+
+namespace {
+
+using h5::Id;
+
+// A process's own rows in increasing whole-mesh index, and the runs of consecutive indices.
+struct Rows {
+  std::vector<size_t> order;                         // local rows
+  std::vector<std::pair<hsize_t, hsize_t>> runs;     // (first whole index, length)
+};
+
+Rows sorted_rows(const int* ids, size_t n) {
+  Rows r;
+  r.order.resize(n);
+  std::iota(r.order.begin(), r.order.end(), size_t{0});
+  std::sort(r.order.begin(), r.order.end(), [ids](size_t a, size_t b) { return ids[a] < ids[b]; });
+  for (size_t k = 0; k < n; ++k) {
+    const hsize_t g = static_cast<hsize_t>(ids[r.order[k]]);
+    if (!r.runs.empty() && r.runs.back().first + r.runs.back().second == g)
+      ++r.runs.back().second;
+    else
+      r.runs.emplace_back(g, 1);
+  }
+  return r;
+}
+
+// Values of the rows in `r.order`, `width` each, padded or cut to `out_width` columns (zeros).
+template <class T>
+std::vector<T> pack(const T* a, size_t width, size_t out_width, const Rows& r) {
+  std::vector<T> out(r.order.size() * out_width, T{});
+  for (size_t k = 0; k < r.order.size(); ++k)
+    for (size_t c = 0; c < std::min(width, out_width); ++c)
+      out[k * out_width + c] = a[r.order[k] * width + c];
+  return out;
+}
+
+struct Target {
+  hid_t group, dxpl;
+  const std::string& path;
+};
+
+// The dataset `name` of `whole` rows of `width` values (one-dimensional when width is 0), of which
+// this process writes the rows `r` from `packed` (in r's order). Collective.
+void write_rows(const Target& t, const std::string& name, hid_t file_type, hid_t mem_type,
+                hsize_t whole, hsize_t width, const Rows& r, const void* packed) {
+  const hsize_t w = width ? width : 1;
+  const hsize_t dims[2] = {whole, w};
+  Id fspace(H5Screate_simple(width ? 2 : 1, dims, nullptr), H5Sclose);
+  Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!fspace.ok() || !dcpl.ok() || H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
+      H5Pset_alloc_time(dcpl.get(), H5D_ALLOC_TIME_EARLY) < 0)
+    h5::fail(t.path, "cannot prepare dataset '" + name + "'");
+  Id dset(H5Dcreate2(t.group, name.c_str(), file_type, fspace.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+          H5Dclose);
+  if (!dset.ok()) h5::fail(t.path, "cannot create dataset '" + name + "'");
+  bool ok = H5Sselect_none(fspace.get()) >= 0;
+  for (const auto& [first, len] : r.runs) {
+    const hsize_t start[2] = {first, 0}, count[2] = {len, w};
+    ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, count, nullptr) >= 0;
+  }
+  const hsize_t n = static_cast<hsize_t>(r.order.size()) * w;
+  const hsize_t mdims[1] = {std::max<hsize_t>(n, 1)};
+  Id mspace(H5Screate_simple(1, mdims, nullptr), H5Sclose);
+  ok = ok && mspace.ok() && (n > 0 || H5Sselect_none(mspace.get()) >= 0);
+  if (!ok) h5::fail(t.path, "cannot select this process's rows of '" + name + "'");
+  static const double none = 0;
+  if (H5Dwrite(dset.get(), mem_type, mspace.get(), fspace.get(), t.dxpl, n > 0 ? packed : &none) < 0)
+    h5::fail(t.path, "cannot write dataset '" + name + "'");
+}
+
+}  // namespace
+
+ParallelFrames::ParallelFrames(long long fapl) : fapl_(fapl) {
+#if H5_VERSION_GE(1, 10, 7)
+  // process 0 wrote /mesh with its own (serial) handle, closed before every frame
+  if (fapl_ >= 0) H5Pset_file_locking(static_cast<hid_t>(fapl_), 0, 1);
+#endif
+}
+
+ParallelFrames::~ParallelFrames() {
+  if (file_ >= 0) H5Fclose(static_cast<hid_t>(file_));
+  if (fapl_ >= 0) H5Pclose(static_cast<hid_t>(fapl_));
+}
+
+void ParallelFrames::write(const std::string& dir, const FramePart& f) const {
+  const std::string path = (std::filesystem::path(dir.empty() ? "." : dir) / snapshot::kH5Name).string();
+  h5::silence();
+  if (file_ < 0) {
+    file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, static_cast<hid_t>(fapl_));
+    if (file_ < 0) h5::fail(path, "cannot open it on every process (MPI-IO)");
+  }
+  const hid_t file = static_cast<hid_t>(file_);
+  Id dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
+  if (!dxpl.ok()) h5::fail(path, "cannot create a transfer property list");
+#ifdef H5_HAVE_PARALLEL
+  if (H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE) < 0)
+    h5::fail(path, "cannot ask for collective writes");
+#endif
+  const std::string gname = "/" + snapshot::step_name(f.step);
+  Id g(H5Gcreate2(file, gname.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  if (!g.ok()) h5::fail(path, "cannot create group '" + gname + "'");
+  h5::write_scalar_attr<double>(g.get(), "time", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, f.time, path);
+  h5::write_scalar_attr<long long>(g.get(), "step", H5T_STD_I64LE, H5T_NATIVE_LLONG,
+                                   static_cast<long long>(f.step), path);
+  const Target t{g.get(), dxpl.get(), path};
+  const size_t dim = static_cast<size_t>(f.dim);
+
+  const Rows nodes = sorted_rows(f.node_ids, f.nodes);
+  const hsize_t nn = static_cast<hsize_t>(f.whole_nodes);
+  const std::pair<const char*, const double*> vectors[] = {
+      {"coordinates", f.x}, {"displacement", f.u}, {"velocity", f.v}};
+  for (const auto& [name, a] : vectors) {
+    const std::vector<double> p = pack(a, dim, 3, nodes);
+    write_rows(t, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, nn, 3, nodes, p.data());
+  }
+
+  const Rows elems = sorted_rows(f.elem_ids, f.elems);
+  const hsize_t ne = static_cast<hsize_t>(f.whole_elems);
+  const std::vector<double> s = pack(f.stress, 6, 6, elems);
+  write_rows(t, "stress", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ne, 6, elems, s.data());
+  std::vector<double> vm(elems.order.size());
+  for (size_t e = 0; e < vm.size(); ++e) {  // as SnapshotWriter::write
+    const double* q = &s[6 * e];
+    const double a = q[0] - q[1], b = q[1] - q[2], c = q[2] - q[0];
+    vm[e] = std::sqrt(0.5 * (a * a + b * b + c * c) + 3.0 * (q[3] * q[3] + q[4] * q[4] + q[5] * q[5]));
+  }
+  write_rows(t, "von_mises", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ne, 0, elems, vm.data());
+
+  const Rows ifaces = sorted_rows(f.iface_ids, f.ifaces);
+  const std::vector<double> d = pack(f.damage, 1, 1, ifaces);
+  write_rows(t, "damage", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, static_cast<hsize_t>(f.whole_ifaces), 0,
+             ifaces, d.data());
+
+  if (f.has_fragment) {  // process 0 holds every element's id (the fragment analysis is its own)
+    Rows all;
+    if (f.fragment && ne > 0) all.runs.emplace_back(0, ne);
+    all.order.resize(f.fragment ? static_cast<size_t>(ne) : 0);
+    std::iota(all.order.begin(), all.order.end(), size_t{0});
+    write_rows(t, "fragment", H5T_STD_I32LE, H5T_NATIVE_INT, ne, 0, all, f.fragment);
+  }
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush after " + gname);
+}
+
+}  // namespace fdem
