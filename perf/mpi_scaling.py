@@ -3,6 +3,7 @@
 
     perf/mpi_scaling.py FDEM_MPI [--steps N] [--h H] [--procs 1,2,3,4] [--reps R] [--out FILE]
     perf/mpi_scaling.py FDEM_MPI --migrations-only [--mh H] [--msteps N] [--reps R] [--out FILE]
+    perf/mpi_scaling.py FDEM_MPI --snapshots-only [--sh H] [--ssteps N] [--reps R] [--out FILE]
     perf/mpi_scaling.py --markdown [--out FILE]
 
 FDEM_MPI: fdem built with -DFDEM_ENABLE_MPI=ON (scripts/mpi_check builds build/mpi/fdem). The 3D
@@ -22,6 +23,12 @@ cuts every 100 steps and moves every element to the other process (FDEM_TEST_REC
 their wall time (summary.json processes.cut_seconds: the state gathered, the partition, the parts
 sent, the new parts set up and checked), the modelled work's largest excess over the mean and each
 process's loop time outside the exchange (busy_seconds: the measured balance).
+Snapshots over processes (docs/parallel.md "Output"): the same impact without contact (element size
+--sh, default 2.5 mm; at most --ssteps steps, default 600, a frame every 30 steps) on 2 and 4 processes, R
+times interleaved: without snapshots, each process writing its own rows (parallel HDF5), and gathered
+on process 0 (FDEM_GATHER_OUTPUT=1): the run's wall time, the frames, the seconds per frame
+against the run without snapshots, and the peak memory of process 0 and of the largest other; and a
+checkpoint every 100 steps written both ways (summary.json's checkpoints.write_seconds per checkpoint).
 Also the exchange of larger decompositions without running them: `fdem partition` of the 3D
 impact at h = 1.5 mm (90 150 tetrahedra) into 2, 8 and 64 parts (METIS): the bytes each part
 would send per step, the input of the weak-scaling model in docs/performance.md section 10.
@@ -86,6 +93,69 @@ def migrations(fdem, reps):
     return rows
 
 
+SNAPSHOT_WAYS = [("no snapshots", None, None), ("every process its rows", "frames", None),
+                 ("gathered on process 0", "frames", {"FDEM_GATHER_OUTPUT": "1"}),
+                 ("checkpoints, every process its rows", "checkpoints", None),
+                 ("checkpoints gathered on process 0", "checkpoints", {"FDEM_GATHER_OUTPUT": "1"})]
+
+
+def snapshots(fdem, reps):
+    h, steps = float(arg("--sh", "0.0025")), int(arg("--ssteps", "600"))
+    base_sets = [SETS[0], SETS[2], f"parameters.h={h}"]
+    first = run_summary(fdem, 1, base_sets + ["time.max_steps=1", "output.snapshot_count=0"])
+    dt = first["time_step"]["dt_s"]
+    got = {}
+    for _ in range(reps):
+        for n in (2, 4):
+            for name, frames, env in SNAPSHOT_WAYS:
+                # a frame every 30 steps (and one at the start and at the end), or a checkpoint every 100
+                out_set = {
+                    "frames": f'output={{"history_rows": 200, "snapshot_interval": {30.5 * dt:.9e}}}',
+                    "checkpoints": f'output={{"history_rows": 200, "checkpoint_every": {100.5 * dt:.9e}}}',
+                    None: "output.snapshot_count=0"}[frames]
+                with tempfile.TemporaryDirectory() as out:
+                    cmd = [fdem, "run", CASE, "--out", out, "--quiet"]
+                    for v in base_sets + [f"time.max_steps={steps}", out_set]:
+                        cmd += ["--set", v]
+                    cmd = (["mpirun", "--oversubscribe", "-n", str(n)] +
+                           [x for k in (env or {}) for x in ("-x", k)] + cmd)
+                    if os.geteuid() == 0:
+                        cmd.insert(1, "--allow-run-as-root")
+                    e = dict(os.environ, OMP_NUM_THREADS="1", OMP_PROC_BIND="false", GOMP_SPINCOUNT="1000",
+                             **(env or {}))
+                    r = subprocess.run(cmd, env=e, capture_output=True, text=True)
+                    if r.returncode != 0:
+                        raise SystemExit(f"{' '.join(cmd)}: exit {r.returncode}\n{r.stderr[-2000:]}")
+                    with open(os.path.join(out, "summary.json")) as f:
+                        summ = json.load(f)
+                    xdmf, h5 = os.path.join(out, "snapshots.xdmf"), os.path.join(out, "snapshots.h5")
+                    with open(xdmf) if os.path.exists(xdmf) else open(os.devnull) as f:
+                        nf = f.read().count('<Grid Name="step_')
+                    ck = summ.get("checkpoint") or {}
+                    got.setdefault((n, name), []).append({
+                        "wall_s": summ["wall_seconds"], "frames": nf, "elements": summ["counts"]["elements"],
+                        "checkpoints": ck.get("written", 0), "checkpoint_s": ck.get("write_seconds", 0.0),
+                        "file_bytes": os.path.getsize(h5) if os.path.exists(h5) else 0,
+                        "rss": summ["processes"]["peak_rss_bytes"]})
+    rows = []
+    for n in (2, 4):
+        base = statistics.median(x["wall_s"] for x in got[(n, SNAPSHOT_WAYS[0][0])])
+        for name, _, _ in SNAPSHOT_WAYS:
+            xs = got[(n, name)]
+            wall = statistics.median(x["wall_s"] for x in xs)
+            nf = xs[-1]["frames"]
+            nc = xs[-1]["checkpoints"]
+            rows.append({"what": name, "processes": n, "h": h, "elements": xs[-1]["elements"], "steps": steps,
+                         "frames": nf, "wall_s": wall, "wall_s_all": [x["wall_s"] for x in xs],
+                         "per_frame_s": (wall - base) / nf if nf else 0.0, "file_bytes": xs[-1]["file_bytes"],
+                         "checkpoints": nc,
+                         "per_checkpoint_s": (statistics.median(x["checkpoint_s"] for x in xs) / nc
+                                              if nc else 0.0),
+                         "rss0_mb": statistics.median(x["rss"][0] for x in xs) / 1e6,
+                         "rss_other_mb": statistics.median(max(x["rss"][1:]) for x in xs) / 1e6})
+    return rows
+
+
 def run(fdem, n, h, steps):
     with tempfile.TemporaryDirectory() as out:
         cmd = [fdem, "run", CASE, "--out", out, "--quiet", "--set", f"parameters.h={h}",
@@ -129,7 +199,8 @@ def measure(fdem):
     load = os.getloadavg()
     return {"machine": f"{os.cpu_count()} cores; load average at the end {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}",
             "command": " ".join(["perf/mpi_scaling.py"] + sys.argv[1:]), "rows": rows,
-            "migrations": migrations(fdem, reps), "decompositions": decompositions(fdem)}
+            "migrations": migrations(fdem, reps), "snapshots": snapshots(fdem, reps),
+            "decompositions": decompositions(fdem)}
 
 
 def decompositions(fdem, h=0.0015, parts=(2, 8, 64)):
@@ -177,6 +248,20 @@ def markdown(res):
             per = f"{m['cut_s'] / m['cuts']:.3f}" if m["cuts"] else "-"
             text += (f"| {m['what']} | {m['cuts']} ({m['rebalances']}) | {m['loop_s']:.2f} | {m['cut_s']:.2f}; {per} | "
                      f"{m['work_excess_largest']:.3f} | {m['busy_s'][0]:.2f}; {m['busy_s'][1]:.2f} |\n")
+    snap = res.get("snapshots") or []
+    if snap:
+        text += ("\n| output | processes | tetrahedra | frames (checkpoints) | wall (s, median) | "
+                 "s per frame (per checkpoint) | snapshots.h5 (MB) | "
+                 "peak memory, process 0; largest other (MB) |\n"
+                 "|---|---|---|---|---|---|---|---|\n")
+        for m in snap:
+            if m.get("checkpoints"):
+                what, per = f"({m['checkpoints']})", f"({m['per_checkpoint_s']:.3f})"
+            else:
+                what, per = f"{m['frames']}", f"{m['per_frame_s']:.3f}"
+            text += (f"| {m['what']} | {m['processes']} | {m['elements']} | {what} | {m['wall_s']:.2f} | "
+                     f"{per} | {m['file_bytes'] / 1e6:.1f} | {m['rss0_mb']:.0f}; {m['rss_other_mb']:.0f} |\n")
+        text += f"\n`{res.get('snapshots_command', '')}`\n"
     return text
 
 
@@ -194,6 +279,11 @@ def main():
             res = json.load(f)
         res["migrations"] = migrations(os.path.abspath(sys.argv[1]), int(arg("--reps", "3")))
         res["migrations_command"] = " ".join(["perf/mpi_scaling.py"] + sys.argv[1:])
+    elif "--snapshots-only" in sys.argv:
+        with open(out) as f:
+            res = json.load(f)
+        res["snapshots"] = snapshots(os.path.abspath(sys.argv[1]), int(arg("--reps", "3")))
+        res["snapshots_command"] = " ".join(["perf/mpi_scaling.py"] + sys.argv[1:])
     else:
         res = measure(os.path.abspath(sys.argv[1]))
     with open(out, "w") as f:

@@ -1112,6 +1112,30 @@ class Report:
             if d.get("migrations_command"):
                 self.w(f"Command: `{d['migrations_command']}`.")
                 self.w()
+        snap = d.get("snapshots") or []
+        if snap:
+            s0 = snap[0]
+            self.w("Snapshots and checkpoints over processes (docs/parallel.md \"Output\"): the same impact with "
+                   f"contact off, h = {s0['h'] * 1e3:.1f} mm ({s0['elements']:,} tetrahedra), at most "
+                   f"{s0['steps']} steps, on 2 and 4 processes of one thread, interleaved (medians): without "
+                   "output, a snapshot about every 30 steps written by every process into the one file (the "
+                   "parallel HDF5) or gathered on process 0 and written there (`FDEM_GATHER_OUTPUT=1`), and a "
+                   "checkpoint about every 100 steps written both ways. Per frame: the run's wall time less the "
+                   "run's without output, per frame; per checkpoint: summary.json's checkpoint write seconds "
+                   "per checkpoint; memory: the peak resident memory of process 0 and of the largest other.")
+            self.w()
+            rows = []
+            for m in snap:
+                ck = m.get("checkpoints", 0)
+                rows.append([m["what"], m["processes"], f"({ck})" if ck else m["frames"], f"{m['wall_s']:.2f}",
+                             f"({m['per_checkpoint_s']:.3f})" if ck else f"{m['per_frame_s']:.3f}",
+                             f"{m['file_bytes'] / 1e6:.1f}", f"{m['rss0_mb']:.0f}; {m['rss_other_mb']:.0f}"])
+            self.w(table(["output", "processes", "frames (checkpoints)", "wall (s)", "s per frame (per checkpoint)",
+                          "snapshots.h5 (MB)", "peak memory, process 0; largest other (MB)"], rows))
+            self.w()
+            if d.get("snapshots_command"):
+                self.w(f"Command: `{d['snapshots_command']}`.")
+                self.w()
         decs = d.get("decompositions") or []
         if not decs:
             return
