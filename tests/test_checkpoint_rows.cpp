@@ -96,6 +96,39 @@ TEST(CheckpointRows, RowsInAnyOrderReadBackInTheWholeMeshsOrder) {
   fs::remove(w.path);
 }
 
+// A restart over processes reads the file without the entries by rows, then each process its
+// rows: two "processes" here, holding nodes {4, 1} and {0, 3, 2} (with node 1 also as a ghost of
+// the second: read, not counted), whose own rows' checksum terms add up to the stored checksum.
+TEST(CheckpointRows, EachProcessReadsItsRowsAndTheirChecksumsAddUp) {
+  const Written w = write_shuffled("parts");
+  fdem::CheckpointHeader h;
+  const fdem::StateArrays s = fdem::read_checkpoint(w.path, h, true);
+  EXPECT_FALSE(s.f64.count("model/x"));
+  EXPECT_EQ(s.by_rows.count("model/x"), 1u);
+  EXPECT_EQ(s.by_rows.count("model/platen_fs"), 1u);
+  EXPECT_EQ(s.get("simulation/t"), 2.5e-4);
+  const std::vector<int> a = {4, 1}, b = {0, 3, 2, 1};
+  uint64_t ha = 0, hb = 0;
+  const std::vector<double> xa = fdem::read_rows(s, "model/platen_fs", a, a.size(), a.size(), 2, 5, 2, ha);
+  const std::vector<double> xb = fdem::read_rows(s, "model/platen_fs", b, b.size(), 3, 2, 5, 2, hb);
+  ASSERT_EQ(xa.size(), 2u * 2 * 2);
+  ASSERT_EQ(xb.size(), 2u * 4 * 2);
+  for (int blk = 0; blk < 2; ++blk) {
+    for (size_t i = 0; i < a.size(); ++i)
+      for (int c = 0; c < 2; ++c) EXPECT_EQ(xa[(blk * a.size() + i) * 2 + c], w.fs_[(blk * 5 + a[i]) * 2 + c]);
+    for (size_t i = 0; i < b.size(); ++i)
+      for (int c = 0; c < 2; ++c) EXPECT_EQ(xb[(blk * b.size() + i) * 2 + c], w.fs_[(blk * 5 + b[i]) * 2 + c]);
+  }
+  EXPECT_TRUE(fdem::rows_checksum_matches(s, "model/platen_fs", ha + hb));
+  EXPECT_FALSE(fdem::rows_checksum_matches(s, "model/platen_fs", ha));  // a process's rows alone
+  uint64_t hi = 0;  // the integer entry, read as doubles
+  const std::vector<int> all = {0, 1, 2, 3};
+  const std::vector<double> flags = fdem::read_rows(s, "model/icontact", all, 4, 4, 1, 4, 1, hi);
+  EXPECT_EQ(flags, (std::vector<double>{-1, 7, -1, 7}));
+  EXPECT_TRUE(fdem::rows_checksum_matches(s, "model/icontact", hi));
+  fs::remove(w.path);
+}
+
 TEST(CheckpointRows, RowChecksumsAddUpOverParts) {
   std::vector<double> v;
   for (int i = 0; i < 30; ++i) v.push_back(1.0 / (i + 1));

@@ -39,6 +39,9 @@ struct StateArrays {
   }
 
   std::string file;  // for messages
+  // read_checkpoint(..., skip_rows = true): the entries written by rows, left in the file (their
+  // stored checksums; read_rows reads a process's rows of them)
+  std::map<std::string, std::string> by_rows;
 };
 
 struct CheckpointHeader {
@@ -92,6 +95,21 @@ void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, c
 // Reads a checkpoint. Throws InputError naming `path` when it is missing, not HDF5, not a
 // checkpoint of this format version, or damaged: a dataset whose values fail their checksum (the
 // message names the dataset), a header or dataset list that fails the root checksum.
-StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h);
+// skip_rows: the entries that every process wrote by rows (write_checkpoint_rows) are not read
+// (StateArrays::by_rows names them): each process of a restart reads its own rows (read_rows).
+StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h, bool skip_rows = false);
+
+// A process's rows of an entry left in the file (StateArrays::by_rows): rows ids[i], i < count, of
+// each of `blocks` blocks of whole_rows rows of `width` values, as values[(b * count + i) * width +
+// c]; `own_hash` gets the rows_hash (checkpoint_internal.hpp) of the first `hashed` of them (the
+// rows this process owns: summed over the processes it must give the stored checksum; checked
+// with rows_checksum_matches). Throws InputError naming the file and the entry when the dataset is
+// missing or of another size.
+std::vector<double> read_rows(const StateArrays& s, const std::string& name, const std::vector<int>& ids,
+                              size_t count, size_t hashed, int blocks, long long whole_rows, int width,
+                              uint64_t& own_hash);
+// Whether the sum over the processes of the entry's own_hash (as two halves summed: the caller's)
+// is its stored checksum.
+bool rows_checksum_matches(const StateArrays& s, const std::string& name, uint64_t total);
 
 }  // namespace fdem

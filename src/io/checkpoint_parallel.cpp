@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "common/error.hpp"
 #include "io/checkpoint.hpp"
 #include "io/checkpoint_internal.hpp"
 #include "io/hdf5_util.hpp"
@@ -168,6 +169,79 @@ void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, c
   if (H5Fclose(file.release()) < 0) w.fail("cannot close " + tmp + " (disk full?)");
   commit(w);
   if (kill_hook().after == count) kill_now();
+}
+
+std::vector<double> read_rows(const StateArrays& s, const std::string& name, const std::vector<int>& ids,
+                              size_t count, size_t hashed, int blocks, long long whole_rows, int width,
+                              uint64_t& own_hash) {
+  const std::string& path = s.file;
+  auto damaged = [&](const std::string& what) {
+    throw InputError("restart file '" + path + "' is damaged: dataset '" + name + "' " + what + reason());
+  };
+  h5::silence();
+  Id fapl = h5::file_access_without_locking();
+  Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, fapl.get()), H5Fclose);
+  if (!file.ok()) throw InputError("restart file '" + path + "' cannot be opened" + reason());
+  Id d(H5Dopen2(file.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d.ok()) damaged("cannot be opened");
+  Id fspace(H5Dget_space(d.get()), H5Sclose);
+  Id type(H5Dget_type(d.get()), H5Tclose);
+  const size_t w = static_cast<size_t>(width);
+  const hsize_t n = static_cast<hsize_t>(blocks) * static_cast<hsize_t>(whole_rows) * w;
+  if (!fspace.ok() || !type.ok() || H5Sget_simple_extent_npoints(fspace.get()) != static_cast<hssize_t>(n))
+    damaged("has another size than " + std::to_string(n) + " values");
+  const bool integer = H5Tget_class(type.get()) == H5T_INTEGER;
+  // this process's rows in increasing order in the file, as runs
+  std::vector<size_t> order(count);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [&ids](size_t a, size_t b) { return ids[a] < ids[b]; });
+  bool ok = H5Sselect_none(fspace.get()) >= 0;
+  std::vector<std::pair<hsize_t, hsize_t>> runs;
+  for (int b = 0; b < blocks; ++b)
+    for (size_t i : order) {
+      const hsize_t first = (static_cast<hsize_t>(b) * static_cast<hsize_t>(whole_rows) +
+                             static_cast<hsize_t>(ids[i])) * w;
+      if (!runs.empty() && runs.back().first + runs.back().second == first)
+        runs.back().second += w;
+      else
+        runs.emplace_back(first, w);
+    }
+  for (const auto& [first, len] : runs) {
+    const hsize_t start[1] = {first}, cnt[1] = {len};
+    ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, cnt, nullptr) >= 0;
+  }
+  const hsize_t m = static_cast<hsize_t>(blocks) * count * w, mdim = std::max<hsize_t>(m, 1);
+  Id mspace(H5Screate_simple(1, &mdim, nullptr), H5Sclose);
+  ok = ok && mspace.ok() && (m > 0 || H5Sselect_none(mspace.get()) >= 0);
+  std::vector<double> f(integer ? 0 : std::max<hsize_t>(m, 1));
+  std::vector<long long> l(integer ? std::max<hsize_t>(m, 1) : 0);
+  if (!ok || H5Dread(d.get(), integer ? H5T_NATIVE_LLONG : H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(),
+                     H5P_DEFAULT, integer ? static_cast<void*>(l.data()) : static_cast<void*>(f.data())) < 0)
+    damaged("cannot be read");
+  // back into the local order; the own rows' checksum terms
+  std::vector<double> out(static_cast<size_t>(m));
+  own_hash = 0;
+  size_t at = 0;
+  for (int b = 0; b < blocks; ++b)
+    for (size_t i : order) {
+      const uint64_t row = static_cast<uint64_t>(b) * static_cast<uint64_t>(whole_rows) +
+                           static_cast<uint64_t>(ids[i]);
+      double* o = &out[(static_cast<size_t>(b) * count + i) * w];
+      if (integer) {
+        for (size_t c = 0; c < w; ++c) o[c] = static_cast<double>(l[at + c]);
+        if (i < hashed) own_hash += rows_hash(&l[at], 1, 8 * w, row);
+      } else {
+        std::copy(&f[at], &f[at] + w, o);
+        if (i < hashed) own_hash += rows_hash(&f[at], 1, 8 * w, row);
+      }
+      at += w;
+    }
+  return out;
+}
+
+bool rows_checksum_matches(const StateArrays& s, const std::string& name, uint64_t total) {
+  const auto it = s.by_rows.find(name);
+  return it != s.by_rows.end() && it->second == hex(total);
 }
 
 }  // namespace fdem

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <numeric>
 
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
@@ -132,6 +133,19 @@ bool cut_by_graph() {
   throw InputError("FDEM_CUT_METHOD='" + std::string(m) + "': give rcb or metis (unset: rcb)");
 }
 
+// Process 0 at a restart: every row of an entry per node left in the checkpoint (StateArrays::by_rows),
+// verified against its stored checksum, into `s`.
+void whole_rows_of(StateArrays& s, const std::string& name, const HostMesh& mesh) {
+  const int nn = mesh.num_nodes();
+  std::vector<int> all(static_cast<size_t>(nn));
+  std::iota(all.begin(), all.end(), 0);
+  uint64_t hash = 0;
+  std::vector<double> v = read_rows(s, name, all, all.size(), all.size(), 1, nn, mesh.dim, hash);
+  if (!rows_checksum_matches(s, name, hash))
+    throw InputError("restart file '" + s.file + "' is damaged: dataset '" + name + "' fails its checksum");
+  s.f64[name] = std::move(v);
+}
+
 // Every process's part of `mesh` (decompose), packed for sending.
 std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vector<int>& elem_part, int parts,
                                             double reach, const std::vector<double>* at) {
@@ -152,10 +166,11 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
   const Comm& comm = *opt.comm;
   const bool root = comm.rank() == 0;
   // a checkpoint holds the whole run's state (Simulation::save_state_whole): every process reads
-  // it and takes its part's rows, whatever the process count that wrote it
+  // it and takes its part's rows, whatever the process count that wrote it; of the entries written
+  // by rows (write_checkpoint_rows) each process reads only its rows (Simulation::load_state_whole)
   StateArrays restart;
   CheckpointHeader header;
-  if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header);
+  if (!opt.restart.empty()) restart = read_checkpoint(opt.restart, header, true);
   const std::string out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   std::unique_ptr<OutputLock> lock;
   HostMesh mesh;  // the whole mesh on process 0; elsewhere only its dimension and body count
@@ -191,6 +206,8 @@ nlohmann::json run_over_processes(const std::string& case_path, Case& c, const R
         partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
     const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : bisection;
     if (reach > 0) cut_by_graph();  // a bad FDEM_CUT_METHOD fails here, before the run
+    if (reach > 0 && restart.by_rows.count("processes/cut_x"))
+      whole_rows_of(restart, "processes/cut_x", mesh);
     const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
     const std::vector<double>* at =
         resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;

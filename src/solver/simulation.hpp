@@ -261,6 +261,10 @@ class Simulation {
  private:
   // Contact in the whole-run checkpoint (simulation_parallel.cpp): each process's own lists and the
   // pairs with a history in whole-mesh numbering; and what a restart takes of them.
+  // load_state_whole: the checksums of the entries read by rows, over the processes (throws
+  // InputError naming the dataset when one fails).
+  void verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
+                   const std::vector<uint64_t>& own_hash) const;
   void save_contact_whole(const StateArrays& local, StateArrays& whole) const;
   void load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const;
   std::vector<double> decomposition_print() const;

@@ -399,6 +399,31 @@ void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count
   }
 }
 
+// The rows read by every process (load_state_whole): each row is one process's own, so the sum of
+// their checksum terms over the processes is the entry's checksum (exact: 32-bit halves summed as
+// doubles). The same verdict on every process.
+template <int D>
+void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
+                                const std::vector<uint64_t>& own_hash) const {
+  std::vector<double> halves;
+  for (uint64_t x : own_hash) {
+    halves.push_back(static_cast<double>(x >> 32));
+    halves.push_back(static_cast<double>(x & 0xffffffffull));
+  }
+  comm_->sum(halves.data(), static_cast<int>(halves.size()));
+  for (size_t k = 0; k < names.size(); ++k) {
+    const uint64_t total =
+        (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+    if (!rows_checksum_matches(whole, names[k], total)) {
+      char sum[32];
+      std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(total));
+      throw InputError("restart file '" + whole.file + "' is damaged: dataset '" + names[k] +
+                       "' fails its checksum (stored " + whole.by_rows.at(names[k]) + "; the rows read by the " +
+                       std::to_string(comm_->size()) + " processes give " + sum + ")");
+    }
+  }
+}
+
 template <int D>
 void Simulation<D>::load_state_whole(const StateArrays& whole) {
   // This part's state as it stands (just built): the rows the whole state does not give (the
@@ -407,29 +432,43 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
   StateArrays local;
   save_state(local);
   StateArrays mine = whole;
+  std::vector<std::string> by_rows;  // the entries read by rows from the file, and the checksum
+  std::vector<uint64_t> own_hash;    // terms of this process's own rows of each
   for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
     if (!local.has(e.name)) continue;
     const bool integer = local.i64.count(e.name) > 0;
     std::vector<double> v = entry_values(local, e.name);
-    const std::vector<double> all = entry_values(whole, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
     const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
-    if (all.size() != blocks * whole_n * w)
-      throw InputError("checkpoint '" + whole.file + "': " + e.name + " has " + std::to_string(all.size()) +
-                       " values, not " + std::to_string(blocks * whole_n * w) + " (the file is damaged)");
     // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
     // interface's (each part computes its interfaces from the same history)
     const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
     const std::vector<int>& ids = e.nodes ? node_global_ : iface_global_;
-    for (size_t b = 0; b < blocks; ++b)
-      for (size_t i = 0; i < rows; ++i)
-        for (size_t k = 0; k < w; ++k)
-          v[(b * n + i) * w + k] = all[(b * whole_n + static_cast<size_t>(ids[i])) * w + k];
+    if (whole.by_rows.count(e.name)) {  // left in the file (write_checkpoint_rows): these rows only
+      const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
+      uint64_t h = 0;
+      const std::vector<double> got = read_rows(whole, e.name, ids, rows, own, e.blocks,
+                                                static_cast<long long>(whole_n), e.width, h);
+      for (size_t b = 0; b < blocks; ++b)
+        std::copy(got.begin() + b * rows * w, got.begin() + (b + 1) * rows * w, v.begin() + b * n * w);
+      by_rows.push_back(e.name);
+      own_hash.push_back(h);
+    } else {
+      const std::vector<double> all = entry_values(whole, e.name);
+      if (all.size() != blocks * whole_n * w)
+        throw InputError("checkpoint '" + whole.file + "': " + e.name + " has " + std::to_string(all.size()) +
+                         " values, not " + std::to_string(blocks * whole_n * w) + " (the file is damaged)");
+      for (size_t b = 0; b < blocks; ++b)
+        for (size_t i = 0; i < rows; ++i)
+          for (size_t k = 0; k < w; ++k)
+            v[(b * n + i) * w + k] = all[(b * whole_n + static_cast<size_t>(ids[i])) * w + k];
+    }
     mine.f64.erase(e.name);
     mine.i64.erase(e.name);
     put_entry(mine, e.name, v, integer);
   }
+  verify_rows(whole, by_rows, own_hash);
   // the accumulators: each process its own where the count is the same, else all on process 0
   const long long count = whole.i64.count(kProcessesPrefix + "count") ? whole.get_int(kProcessesPrefix + "count") : 1;
   for (const char* name : kSummedEntries) {
@@ -498,6 +537,8 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
   template void Simulation<D>::contact_over_parts();                                           \
   template void Simulation<D>::agree_on_contact();                                             \
   template void Simulation<D>::save_state_whole(StateArrays&, std::vector<RowPart>*) const;   \
+  template void Simulation<D>::verify_rows(const StateArrays&, const std::vector<std::string>&, \
+                                           const std::vector<uint64_t>&) const;                \
   template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
   template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \
   template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \

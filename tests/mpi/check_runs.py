@@ -199,6 +199,19 @@ def check_restarts(fdem, name, ck, after_tol=None):
               f"{name} on 2 processes: checkpoint.h5 written by every process (its rows of {len(rows)} "
               f"entries: {', '.join(rows[:3])}, ...) the same bits as gathered on process 0 ({what}; the "
               f"wall times aside)")
+        # a restart reads each process's rows only and checks them against the stored checksum: one
+        # value changed in the file is found, whichever process read it
+        import h5py
+        bad = os.path.join(WORK, f"{name}-ck2-damaged.h5")
+        shutil.copy(os.path.join(WORK, f"{name}-ck2", "checkpoint.h5"), bad)
+        with h5py.File(bad, "r+") as f:
+            v = f["model/ihist"][()]
+            v[len(v) // 2] += 1e-9
+            f["model/ihist"][...] = v
+        r = run(fdem, 2, case, sets, os.path.join(WORK, f"{name}-damaged"), extra=["--restart", bad])
+        check(r.returncode == 2 and "dataset 'model/ihist' fails its checksum" in r.stderr,
+              f"{name}: a checkpoint by rows with one value changed, restarted on 2 processes: exit "
+              f"{r.returncode}, the message names the dataset")
     for src, n in ((2, 2), (2, 3), (2, 1), (1, 4)):
         out = os.path.join(WORK, f"{name}-restart{src}-{n}")
         ck = os.path.join(WORK, f"{name}-ck{src}")
