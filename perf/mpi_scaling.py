@@ -24,11 +24,13 @@ their wall time (summary.json processes.cut_seconds: the state gathered, the par
 sent, the new parts set up and checked), the modelled work's largest excess over the mean and each
 process's loop time outside the exchange (busy_seconds: the measured balance).
 Snapshots over processes (docs/parallel.md "Output"): the same impact without contact (element size
---sh, default 2.5 mm; at most --ssteps steps, default 600, a frame every 30 steps) on 2 and 4 processes, R
+--sh, default 2.5 mm; at most --ssteps steps, default 600, a frame every 30 steps; shorter runs a
+fifth of their steps) on 2 and 4 processes, R
 times interleaved: without snapshots, each process writing its own rows (parallel HDF5), and gathered
 on process 0 (FDEM_GATHER_OUTPUT=1): the run's wall time, the frames, the seconds per frame
 against the run without snapshots, and the peak memory of process 0 and of the largest other; and a
-checkpoint every 100 steps written both ways (summary.json's checkpoints.write_seconds per checkpoint).
+checkpoint every 100 steps (shorter runs: a quarter of their steps) written both ways (summary.json's
+checkpoint.write_seconds per checkpoint).
 Also the exchange of larger decompositions without running them: `fdem partition` of the 3D
 impact at h = 1.5 mm (90 150 tetrahedra) into 2, 8 and 64 parts (METIS): the bytes each part
 would send per step, the input of the weak-scaling model in docs/performance.md section 10.
@@ -109,9 +111,11 @@ def snapshots(fdem, reps):
         for n in (2, 4):
             for name, frames, env in SNAPSHOT_WAYS:
                 # a frame every 30 steps (and one at the start and at the end), or a checkpoint every 100
+                # (in shorter runs: 5 frames, 4 checkpoints)
+                every_frame, every_ck = min(30, steps // 5) + 0.5, min(100, steps // 4) + 0.5
                 out_set = {
-                    "frames": f'output={{"history_rows": 200, "snapshot_interval": {30.5 * dt:.9e}}}',
-                    "checkpoints": f'output={{"history_rows": 200, "checkpoint_every": {100.5 * dt:.9e}}}',
+                    "frames": f'output={{"history_rows": 200, "snapshot_interval": {every_frame * dt:.9e}}}',
+                    "checkpoints": f'output={{"history_rows": 200, "checkpoint_every": {every_ck * dt:.9e}}}',
                     None: "output.snapshot_count=0"}[frames]
                 with tempfile.TemporaryDirectory() as out:
                     cmd = [fdem, "run", CASE, "--out", out, "--quiet"]
@@ -261,7 +265,8 @@ def markdown(res):
                 what, per = f"{m['frames']}", f"{m['per_frame_s']:.3f}"
             text += (f"| {m['what']} | {m['processes']} | {m['elements']} | {what} | {m['wall_s']:.2f} | "
                      f"{per} | {m['file_bytes'] / 1e6:.1f} | {m['rss0_mb']:.0f}; {m['rss_other_mb']:.0f} |\n")
-        text += f"\n`{res.get('snapshots_command', '')}`\n"
+        if res.get("snapshots_command"):
+            text += f"\n`{res['snapshots_command']}`\n"
     return text
 
 
