@@ -259,7 +259,7 @@ class Simulation {
   void check_state_whole(const StateArrays& given) const;
 
  private:
-  // Contact in the whole-run checkpoint (simulation_parallel.cpp): each process's own lists and the
+  // Contact in the whole-run checkpoint (simulation_state_whole.cpp): each process's own lists and the
   // pairs with a history in whole-mesh numbering; and what a restart takes of them.
   // load_state_whole: the checksums of the entries read by rows, over the processes (throws
   // InputError naming the dataset when one fails).

@@ -1,0 +1,392 @@
+// Simulation's whole-run state over several processes (docs/parallel.md, "Checkpoints"): the state
+// of the whole run in the whole mesh's order for a checkpoint or a cut (save_state_whole; with the
+// parallel HDF5 each process's own rows left to it to write), a part's state taken from it
+// (load_state_whole; of a checkpoint written by rows each process reads and verifies its rows),
+// and the checks made after every cut (whole_mass_momentum, check_state_whole).
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <iterator>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "common/error.hpp"
+#include "kernels/parts.hpp"
+#include "solver/simulation.hpp"
+
+namespace fdem {
+
+namespace {
+
+// Checkpoint entries with rows per node or per interface: `blocks` blocks (one per platen for the
+// platens' per-node springs) of one row of `width` values per item.
+struct ItemEntry {
+  const char* name;
+  bool nodes;  // else interfaces
+  int blocks, width;
+};
+
+template <int D>
+std::vector<ItemEntry> item_entries(int platens) {
+  return {{"model/x", true, 1, D},           {"model/v", true, 1, D},
+          {"model/f", true, 1, D},           {"model/platen_area", true, 1, 1},
+          {"model/platen_fs", true, platens, D}, {"model/platen_g0", true, platens, 1},
+          {"model/ihist", false, 1, 4 * D},  {"model/icontact", false, 1, 1}};
+}
+
+// Accumulators of what each process's own items did (their sum is the whole run's).
+const char* const kSummedEntries[] = {"simulation/work_damping", "simulation/work_bc",
+                                      "simulation/work_ramped_loads", "model/platen_acc"};
+
+const std::string kProcessesPrefix = "processes/";
+
+// An entry's values as doubles (the integer entries are flags and counts: exact).
+std::vector<double> entry_values(const StateArrays& s, const std::string& name) {
+  if (s.f64.count(name)) return s.f64.at(name);
+  const std::vector<long long>& v = s.int_array(name);
+  return std::vector<double>(v.begin(), v.end());
+}
+
+void put_entry(StateArrays& s, const std::string& name, const std::vector<double>& v, bool integer) {
+  if (!integer) {
+    s.f64[name] = v;
+    return;
+  }
+  std::vector<long long>& out = s.i64[name];
+  out.assign(v.size(), 0);
+  for (size_t i = 0; i < v.size(); ++i) out[i] = static_cast<long long>(v[i]);
+}
+
+}  // namespace
+
+template <int D>
+void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* rows) const {
+  StateArrays local;
+  save_state(local);
+  const bool root = comm_->rank() == 0;
+  whole = StateArrays{};
+  if (root) whole = local;  // the entries every process holds alike; the others replaced below
+  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
+    double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
+    comm_->min(&absent, 1);
+    if (absent > 0) continue;
+    const bool integer = local.i64.count(e.name) > 0;
+    const std::vector<double> v = entry_values(local, e.name);
+    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
+    const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
+    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+    if (v.size() != blocks * n * w)
+      throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
+                       " values, not " + std::to_string(blocks * n * w));
+    if (rows) {  // each process writes its own rows (io/checkpoint.hpp: write_checkpoint_rows)
+      RowPart r;
+      r.name = e.name;
+      r.integer = integer;
+      r.whole_rows = e.nodes ? whole_nn_ : whole_ni_;
+      r.blocks = e.blocks;
+      r.width = e.width;
+      r.ids = e.nodes ? &node_global_ : &iface_global_;
+      r.own = own;
+      for (size_t b = 0; b < blocks; ++b)
+        r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+      rows->push_back(std::move(r));
+      whole.f64.erase(e.name);
+      whole.i64.erase(e.name);
+      continue;
+    }
+    std::vector<double> out;
+    for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
+      const std::vector<double> rows = gather_rows(*comm_, v.data() + b * n * w, own, w,
+                                                   e.nodes ? node_global_ : iface_global_,
+                                                   static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_));
+      out.insert(out.end(), rows.begin(), rows.end());
+    }
+    if (!root) continue;
+    whole.f64.erase(e.name);
+    whole.i64.erase(e.name);
+    put_entry(whole, e.name, out, integer);
+  }
+  for (const char* name : kSummedEntries) {
+    if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
+    const std::vector<double>& v = local.f64.at(name);
+    std::vector<double> all;
+    comm_->gather(v, all);
+    if (!root || v.empty()) continue;
+    std::vector<double> total(v.size(), 0.0);
+    for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
+    whole.f64[name] = total;
+    whole.f64[kProcessesPrefix + name] = all;
+  }
+  if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
+  if (contact_) {
+    save_contact_whole(local, whole);
+    // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
+    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), xcut_);
+    std::vector<double> own(xc.extent(0) * D);
+    for (size_t i = 0; i < xc.extent(0); ++i)
+      for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);
+    if (rows) {
+      RowPart r;
+      r.name = kProcessesPrefix + "cut_x";
+      r.whole_rows = whole_nn_;
+      r.width = D;
+      r.ids = &node_global_;
+      r.own = xc.extent(0);
+      r.values = std::move(own);
+      rows->push_back(std::move(r));
+    } else {
+      std::vector<double> cut = gather_rows(*comm_, own.data(), xc.extent(0), D, node_global_, whole_nn_);
+      if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
+    }
+  }
+}
+
+// Contact in the whole state: every process's own entries as they are, under "processes/" with
+// their sizes under "processes/sizes/" (a restart on as many processes, cut the same way, takes its
+// own back and goes on to the bit); for a restart on another count (or on one process) the pairs
+// with a history in whole-mesh numbering ("contact/pairs": every process's rows), the counters
+// summed, whether surfaces may meet on any process, and the poll counter (the same on all).
+template <int D>
+void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& whole) const {
+  const bool root = comm_->rank() == 0;
+  std::vector<std::pair<std::string, bool>> names;  // (the same on every process: the same code wrote them)
+  for (const auto& e : local.f64)
+    if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, false);
+  for (const auto& e : local.i64)
+    if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, true);
+  for (const auto& [name, integer] : names) {
+    const std::vector<double> v = entry_values(local, name);
+    std::vector<double> all, sizes;
+    comm_->gather(v, all);
+    comm_->gather({static_cast<double>(v.size())}, sizes);
+    if (!root) continue;
+    whole.f64.erase(name);
+    whole.i64.erase(name);
+    put_entry(whole, name == "contact/pairs" ? name : kProcessesPrefix + name, all, integer);
+    whole.f64[kProcessesPrefix + "sizes/" + name] = sizes;
+  }
+  std::vector<double> cut;
+  comm_->gather(decomposition_print(), cut);
+  if (!root) return;
+  whole.f64[kProcessesPrefix + "contact_parts"] = cut;
+  auto per = [&whole](const char* name) { return entry_values(whole, kProcessesPrefix + name); };
+  auto sum = [&per](const char* name) {
+    double t = 0;
+    for (double v : per(name)) t += v;
+    return t;
+  };
+  for (const char* name : {"contact/builds", "contact/handed_over", "contact/list_updates", "contact/active"})
+    whole.put_int(name, static_cast<long long>(sum(name)));
+  whole.put("contact/dissipated", sum("contact/dissipated"));
+  const std::vector<double> meet = per("contact/may_meet");
+  whole.put_int("contact/may_meet", *std::max_element(meet.begin(), meet.end()) != 0 ? 1 : 0);
+  whole.put_int("contact/since_check", static_cast<long long>(per("contact/since_check").at(0)));
+  whole.put_int("contact/pair_row", ContactSystem<D>::kPairRow);
+}
+
+// What identifies this process's part (its node count, own nodes and a hash of their whole-mesh
+// ids): a restart takes its own contact lists back only when its part is the same.
+template <int D>
+std::vector<double> Simulation<D>::decomposition_print() const {
+  const uint64_t h = fnv1a(node_global_.data(), node_global_.size() * sizeof(int));
+  return {static_cast<double>(m.nn), static_cast<double>(m.owned_nodes()), static_cast<double>(h >> 32),
+          static_cast<double>(h & 0xffffffffu)};
+}
+
+// This process's contact entries from the whole state (load_state_whole): its own as they were
+// where the run had as many processes cut the same way; else (another count, or a single
+// process's checkpoint) the pairs in whole-mesh numbering, from which ContactSystem::load_state
+// takes those of its own nodes (counters: process 0 the sums, the others nothing).
+template <int D>
+void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const {
+  for (auto it = mine.f64.begin(); it != mine.f64.end();)
+    it = it->first.rfind("contact/", 0) == 0 ? mine.f64.erase(it) : std::next(it);
+  for (auto it = mine.i64.begin(); it != mine.i64.end();)
+    it = it->first.rfind("contact/", 0) == 0 ? mine.i64.erase(it) : std::next(it);
+  const std::string parts = kProcessesPrefix + "contact_parts", sizes = kProcessesPrefix + "sizes/";
+  const std::vector<double> print = decomposition_print();
+  const size_t w = print.size(), r = static_cast<size_t>(comm_->rank());
+  const bool same = count == comm_->size() && whole.f64.count(parts) &&
+                    whole.f64.at(parts).size() == w * static_cast<size_t>(count) &&
+                    std::equal(print.begin(), print.end(), whole.f64.at(parts).begin() + r * w);
+  if (same) {
+    for (const auto& e : whole.f64) {
+      if (e.first.rfind(sizes + "contact/", 0) != 0) continue;
+      const std::string name = e.first.substr(sizes.size());
+      const std::string from = name == "contact/pairs" ? name : kProcessesPrefix + name;
+      const std::vector<double> all = entry_values(whole, from);
+      const std::vector<double>& n = e.second;
+      size_t begin = 0;
+      for (size_t p = 0; p < r && p < n.size(); ++p) begin += static_cast<size_t>(n[p]);
+      const size_t len = r < n.size() ? static_cast<size_t>(n[r]) : 0;
+      if (n.size() != static_cast<size_t>(count) || begin + len > all.size())
+        throw InputError("checkpoint '" + whole.file + "': " + e.first + " does not match " + from +
+                         " (the file is damaged)");
+      put_entry(mine, name, std::vector<double>(all.begin() + begin, all.begin() + begin + len),
+                whole.i64.count(from) > 0);
+    }
+    return;
+  }
+  if (!whole.has("contact/pairs"))
+    throw InputError("checkpoint '" + whole.file + "' holds its contacts in one process's numbering only (written "
+                     "before checkpoints with contact over processes): restart it on one process");
+  for (const char* name : {"contact/pairs", "contact/pair_row", "contact/may_meet", "contact/since_check",
+                           "contact/builds", "contact/handed_over", "contact/list_updates", "contact/dissipated"}) {
+    const bool integer = whole.i64.count(name) > 0;
+    std::vector<double> v = entry_values(whole, name);
+    const std::string n = name;
+    if (comm_->rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
+                               n == "contact/dissipated"))
+      std::fill(v.begin(), v.end(), 0.0);
+    put_entry(mine, name, v, integer);
+  }
+}
+
+// The rows read by every process (load_state_whole): each row is one process's own, so the sum of
+// their checksum terms over the processes is the entry's checksum (exact: 32-bit halves summed as
+// doubles). The same verdict on every process.
+template <int D>
+void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
+                                const std::vector<uint64_t>& own_hash) const {
+  std::vector<double> halves;
+  for (uint64_t x : own_hash) {
+    halves.push_back(static_cast<double>(x >> 32));
+    halves.push_back(static_cast<double>(x & 0xffffffffull));
+  }
+  comm_->sum(halves.data(), static_cast<int>(halves.size()));
+  for (size_t k = 0; k < names.size(); ++k) {
+    const uint64_t total =
+        (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+    if (!rows_checksum_matches(whole, names[k], total)) {
+      char sum[32];
+      std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(total));
+      throw InputError("restart file '" + whole.file + "' is damaged: dataset '" + names[k] +
+                       "' fails its checksum (stored " + whole.by_rows.at(names[k]) + "; the rows read by the " +
+                       std::to_string(comm_->size()) + " processes give " + sum + ")");
+    }
+  }
+}
+
+template <int D>
+void Simulation<D>::load_state_whole(const StateArrays& whole) {
+  // This part's state as it stands (just built): the rows the whole state does not give (the
+  // ghost nodes' velocities, forces and platen springs, which no step reads and the run leaves as
+  // they were built) stay as they are.
+  StateArrays local;
+  save_state(local);
+  StateArrays mine = whole;
+  std::vector<std::string> by_rows;  // the entries read by rows from the file, and the checksum
+  std::vector<uint64_t> own_hash;    // terms of this process's own rows of each
+  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
+    if (!local.has(e.name)) continue;
+    const bool integer = local.i64.count(e.name) > 0;
+    std::vector<double> v = entry_values(local, e.name);
+    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
+    const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
+    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+    // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
+    // interface's (each part computes its interfaces from the same history)
+    const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
+    const std::vector<int>& ids = e.nodes ? node_global_ : iface_global_;
+    if (whole.by_rows.count(e.name)) {  // left in the file (write_checkpoint_rows): these rows only
+      const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
+      uint64_t h = 0;
+      const std::vector<double> got = read_rows(whole, e.name, ids, rows, own, e.blocks,
+                                                static_cast<long long>(whole_n), e.width, h);
+      for (size_t b = 0; b < blocks; ++b)
+        std::copy(got.begin() + b * rows * w, got.begin() + (b + 1) * rows * w, v.begin() + b * n * w);
+      by_rows.push_back(e.name);
+      own_hash.push_back(h);
+    } else {
+      const std::vector<double> all = entry_values(whole, e.name);
+      if (all.size() != blocks * whole_n * w)
+        throw InputError("checkpoint '" + whole.file + "': " + e.name + " has " + std::to_string(all.size()) +
+                         " values, not " + std::to_string(blocks * whole_n * w) + " (the file is damaged)");
+      for (size_t b = 0; b < blocks; ++b)
+        for (size_t i = 0; i < rows; ++i)
+          for (size_t k = 0; k < w; ++k)
+            v[(b * n + i) * w + k] = all[(b * whole_n + static_cast<size_t>(ids[i])) * w + k];
+    }
+    mine.f64.erase(e.name);
+    mine.i64.erase(e.name);
+    put_entry(mine, e.name, v, integer);
+  }
+  verify_rows(whole, by_rows, own_hash);
+  // the accumulators: each process its own where the count is the same, else all on process 0
+  const long long count = whole.i64.count(kProcessesPrefix + "count") ? whole.get_int(kProcessesPrefix + "count") : 1;
+  for (const char* name : kSummedEntries) {
+    if (!whole.f64.count(name)) continue;
+    std::vector<double> v = whole.f64.at(name);
+    const std::string parts = kProcessesPrefix + name;
+    if (count == comm_->size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
+      std::copy(whole.f64.at(parts).begin() + comm_->rank() * v.size(),
+                whole.f64.at(parts).begin() + (comm_->rank() + 1) * v.size(), v.begin());
+    else if (comm_->rank() != 0)
+      std::fill(v.begin(), v.end(), 0.0);
+    mine.f64[name] = v;
+  }
+  if (contact_) load_contact_whole(whole, count, mine);
+  load_state(mine);
+  exchange_ghosts();
+}
+
+template <int D>
+std::vector<double> Simulation<D>::whole_mass_momentum() const {
+  double s[5];
+  mass_momentum(m, s);
+  comm_->sum(s, 5);
+  return {s[0], s[1], s[2], s[3], s[4]};
+}
+
+template <int D>
+void Simulation<D>::check_state_whole(const StateArrays& given) const {
+  StateArrays again;
+  save_state_whole(again);
+  // each node, element and interface owned once (a duplicate would also leave one without owner)
+  double owned[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
+                     static_cast<double>(m.owned_ifaces())};
+  comm_->sum(owned, 3);
+  if (comm_->rank() != 0) return;
+  std::string diff;
+  const double whole[3] = {static_cast<double>(whole_nn_), static_cast<double>(whole_ne_),
+                           static_cast<double>(whole_ni_)};
+  const char* what[3] = {"nodes", "elements", "interfaces"};
+  for (int k = 0; k < 3; ++k)
+    if (owned[k] != whole[k])
+      diff += std::string(" ") + what[k] + " owned " + std::to_string(static_cast<long>(owned[k])) + " times for " +
+              std::to_string(static_cast<long>(whole[k]));
+  for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact"})
+    if (given.has(name) && entry_values(given, name) != entry_values(again, name)) diff += std::string(" ") + name;
+  if (contact_) {  // the pairs with a history, in any order
+    const size_t w = ContactSystem<D>::kPairRow;
+    auto rows = [w](const std::vector<double>& v) {
+      std::vector<std::vector<double>> r;
+      for (size_t j = 0; j + w <= v.size(); j += w) r.emplace_back(v.begin() + j, v.begin() + j + w);
+      std::sort(r.begin(), r.end());
+      return r;
+    };
+    const auto a = rows(given.array("contact/pairs")), b = rows(again.array("contact/pairs"));
+    if (a != b)
+      diff += " contact/pairs (" + std::to_string(a.size()) + " pairs with a history given, " +
+              std::to_string(b.size()) + " held)";
+  }
+  if (!diff.empty())
+    throw std::logic_error("internal error: the parts cut anew do not hold the run's state they were given:" + diff);
+}
+
+#define FDEM_SIMULATION_STATE_WHOLE(D)                                                         \
+  template void Simulation<D>::save_state_whole(StateArrays&, std::vector<RowPart>*) const;   \
+  template void Simulation<D>::verify_rows(const StateArrays&, const std::vector<std::string>&, \
+                                           const std::vector<uint64_t>&) const;                \
+  template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
+  template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \
+  template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \
+  template void Simulation<D>::load_contact_whole(const StateArrays&, long long, StateArrays&) const; \
+  template std::vector<double> Simulation<D>::decomposition_print() const;                     \
+  template void Simulation<D>::load_state_whole(const StateArrays&);
+FDEM_SIMULATION_STATE_WHOLE(2)
+FDEM_SIMULATION_STATE_WHOLE(3)
+#undef FDEM_SIMULATION_STATE_WHOLE
+
+}  // namespace fdem
