@@ -310,6 +310,7 @@ void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
     if (++written == total / 2 && w.kill_midway) kill_now();
   };
   auto dataset = [&](const std::string& name, hid_t ftype, hid_t mtype, size_t n, const void* data) {
+    if (sums.count(name)) return;  // written by rows already (write_checkpoint_rows)
     const hsize_t dims[1] = {static_cast<hsize_t>(n)};
     Id sp(H5Screate_simple(1, dims, nullptr), H5Sclose);
     Id d(H5Dcreate2(f, name.c_str(), ftype, sp.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Dclose);
@@ -323,6 +324,7 @@ void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
   for (const auto& [name, v] : s.f64) dataset(name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.size(), v.data());
   for (const auto& [name, v] : s.i64) dataset(name, H5T_STD_I64LE, H5T_NATIVE_LLONG, v.size(), v.data());
   for (const auto& [name, v] : s.str) {
+    if (sums.count(name)) continue;
     Id t(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(t.get(), std::max<size_t>(1, v.size()));
     Id sp(H5Screate(H5S_SCALAR), H5Sclose);

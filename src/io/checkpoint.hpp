@@ -108,8 +108,12 @@ StateArrays read_checkpoint(const std::string& path, CheckpointHeader& h, bool s
 std::vector<double> read_rows(const StateArrays& s, const std::string& name, const std::vector<int>& ids,
                               size_t count, size_t hashed, int blocks, long long whole_rows, int width,
                               uint64_t& own_hash);
-// Whether the sum over the processes of the entry's own_hash (as two halves summed: the caller's)
-// is its stored checksum.
+// The sums (mod 2^64) over the processes of each process's checksum terms `mine`, exactly: each as
+// two 32-bit halves summed as doubles by `sum` (Comm::sum); the same on every process. Collective.
+std::vector<uint64_t> sum_hashes_over_processes(const std::vector<uint64_t>& mine,
+                                                const std::function<void(double*, int)>& sum);
+// Whether the sum over the processes of the entry's own_hash (sum_hashes_over_processes) is its
+// stored checksum.
 bool rows_checksum_matches(const StateArrays& s, const std::string& name, uint64_t total);
 
 }  // namespace fdem

@@ -63,7 +63,8 @@ struct Writing {
 // The attributes of the root group (layout: checkpoint.hpp), without the root checksum.
 void write_header(hid_t f, const CheckpointHeader& h, const std::string& path);
 // One dataset per state entry, at its name (intermediate groups created): float64, int64, then
-// fixed-length string scalars; each with its checksum, also put into `sums` (by name).
+// fixed-length string scalars; each with its checksum, also put into `sums` (by name). An entry
+// already in `sums` is left out (written by rows: write_checkpoint_rows).
 void write_datasets(hid_t f, const StateArrays& s, const Writing& w,
                     std::map<std::string, std::string>& sums);
 // Syncs w.tmp, renames it over w.path and syncs the folder.

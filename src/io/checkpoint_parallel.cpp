@@ -10,7 +10,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <map>
-#include <numeric>
 #include <string>
 #include <utility>
 #include <vector>
@@ -30,7 +29,7 @@ namespace {
 // This process's rows of one entry: the file's value positions (runs over every block) and the
 // values in that order; the sum of their rows' hashes.
 struct OwnRows {
-  std::vector<std::pair<hsize_t, hsize_t>> runs;  // (first value, count of values)
+  h5::Runs runs;  // (first value, count of values)
   std::vector<double> f64;
   std::vector<long long> i64;
   uint64_t hash = 0;
@@ -39,21 +38,14 @@ struct OwnRows {
 OwnRows own_rows(const RowPart& r) {
   OwnRows o;
   const size_t w = static_cast<size_t>(r.width);
-  std::vector<size_t> order(r.own);
-  std::iota(order.begin(), order.end(), size_t{0});
   const std::vector<int>& ids = *r.ids;
-  std::sort(order.begin(), order.end(), [&ids](size_t a, size_t b) { return ids[a] < ids[b]; });
+  const std::vector<size_t> order = h5::order_by(ids.data(), r.own);
   for (int b = 0; b < r.blocks; ++b) {
-    for (size_t k = 0; k < order.size(); ++k) {
-      const size_t i = order[k];
+    for (size_t i : order) {
       const uint64_t row = static_cast<uint64_t>(b) * static_cast<uint64_t>(r.whole_rows) +
                            static_cast<uint64_t>(ids[i]);
       const double* v = &r.values[(static_cast<size_t>(b) * r.own + i) * w];
-      const hsize_t first = static_cast<hsize_t>(row * w);
-      if (!o.runs.empty() && o.runs.back().first + o.runs.back().second == first)
-        o.runs.back().second += w;
-      else
-        o.runs.emplace_back(first, w);
+      o.runs.add(static_cast<hsize_t>(row * w), w);
       if (r.integer) {
         for (size_t c = 0; c < w; ++c) o.i64.push_back(static_cast<long long>(v[c]));
         o.hash += rows_hash(&o.i64[o.i64.size() - w], 1, 8 * w, row);
@@ -78,10 +70,8 @@ std::vector<uint64_t> write_rows(const std::vector<RowPart>& rows, const Checkpo
   if (!file.ok()) w.fail("cannot create " + w.tmp + " on every process (MPI-IO)");
   Id dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
   Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
-  Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-  if (!dxpl.ok() || !lcpl.ok() || !dcpl.ok() || H5Pset_create_intermediate_group(lcpl.get(), 1) < 0 ||
-      H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
-      H5Pset_alloc_time(dcpl.get(), H5D_ALLOC_TIME_EARLY) < 0)
+  Id dcpl = h5::written_once();
+  if (!dxpl.ok() || !lcpl.ok() || !dcpl.ok() || H5Pset_create_intermediate_group(lcpl.get(), 1) < 0)
     w.fail("cannot create property lists");
 #ifdef H5_HAVE_PARALLEL
   if (H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE) < 0) w.fail("cannot ask for collective writes");
@@ -97,16 +87,10 @@ std::vector<uint64_t> write_rows(const std::vector<RowPart>& rows, const Checkpo
                     lcpl.get(), dcpl.get(), H5P_DEFAULT),
          H5Dclose);
     if (!fspace.ok() || !d.ok()) w.fail("cannot create dataset '" + r.name + "'");
-    bool ok = H5Sselect_none(fspace.get()) >= 0;
-    for (const auto& [first, count] : o.runs) {
-      const hsize_t start[1] = {first}, cnt[1] = {count};
-      ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, cnt, nullptr) >= 0;
-    }
     const hsize_t m = r.integer ? o.i64.size() : o.f64.size();
-    const hsize_t mdim = std::max<hsize_t>(m, 1);
-    Id mspace(H5Screate_simple(1, &mdim, nullptr), H5Sclose);
-    ok = ok && mspace.ok() && (m > 0 || H5Sselect_none(mspace.get()) >= 0);
-    if (!ok) w.fail("cannot select this process's rows of '" + r.name + "'");
+    Id mspace = h5::memory_space(m);
+    if (!h5::select_runs(fspace.get(), o.runs) || !mspace.ok())
+      w.fail("cannot select this process's rows of '" + r.name + "'");
     static const long long none = 0;
     const void* data = m == 0      ? static_cast<const void*>(&none)
                        : r.integer ? static_cast<const void*>(o.i64.data())
@@ -128,14 +112,7 @@ void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, c
   h5::silence();
   const std::string tmp = path + ".tmp";
   const Writing w{path, tmp, p.root && kill_hook().during == count};
-  const std::vector<uint64_t> mine = write_rows(rows, p, w);
-  // the sums over the processes, exact: each 64-bit sum as two 32-bit halves in doubles
-  std::vector<double> halves;
-  for (uint64_t x : mine) {
-    halves.push_back(static_cast<double>(x >> 32));
-    halves.push_back(static_cast<double>(x & 0xffffffffull));
-  }
-  p.sum(halves.data(), static_cast<int>(halves.size()));
+  const std::vector<uint64_t> totals = sum_hashes_over_processes(write_rows(rows, p, w), p.sum);
   if (!p.root) return;
 
   Id fapl = h5::file_access_without_locking();
@@ -145,8 +122,7 @@ void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, c
     write_header(file.get(), h, path);
     std::map<std::string, std::string> sums;
     for (size_t k = 0; k < rows.size(); ++k) {
-      const uint64_t total =
-          (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+      const uint64_t total = totals[k];
       const std::string& name = rows[k].name;
       Id d(H5Dopen2(file.get(), name.c_str(), H5P_DEFAULT), H5Dclose);
       if (!d.ok()) w.fail("cannot open dataset '" + name + "'");
@@ -154,12 +130,7 @@ void write_checkpoint_rows(const std::string& path, const CheckpointHeader& h, c
       string_attr(d.get(), kChecksum, sums[name], path);
       h5::write_scalar_attr<int>(d.get(), kRowsAttr, H5T_STD_I32LE, H5T_NATIVE_INT, rows[k].width, path);
     }
-    StateArrays rest = s;  // (an entry of the rows is the rows')
-    for (const RowPart& r : rows) {
-      rest.f64.erase(r.name);
-      rest.i64.erase(r.name);
-    }
-    write_datasets(file.get(), rest, w, sums);
+    write_datasets(file.get(), s, w, sums);  // (an entry of the rows is the rows': in sums)
     string_attr(file.get(), kChecksum, root_checksum(h, kVersion, sums), path);
   } catch (...) {
     H5Fclose(file.release());
@@ -192,27 +163,17 @@ std::vector<double> read_rows(const StateArrays& s, const std::string& name, con
     damaged("has another size than " + std::to_string(n) + " values");
   const bool integer = H5Tget_class(type.get()) == H5T_INTEGER;
   // this process's rows in increasing order in the file, as runs
-  std::vector<size_t> order(count);
-  std::iota(order.begin(), order.end(), size_t{0});
-  std::sort(order.begin(), order.end(), [&ids](size_t a, size_t b) { return ids[a] < ids[b]; });
-  bool ok = H5Sselect_none(fspace.get()) >= 0;
-  std::vector<std::pair<hsize_t, hsize_t>> runs;
+  const std::vector<size_t> order = h5::order_by(ids.data(), count);
+  h5::Runs runs;
   for (int b = 0; b < blocks; ++b)
     for (size_t i : order) {
-      const hsize_t first = (static_cast<hsize_t>(b) * static_cast<hsize_t>(whole_rows) +
-                             static_cast<hsize_t>(ids[i])) * w;
-      if (!runs.empty() && runs.back().first + runs.back().second == first)
-        runs.back().second += w;
-      else
-        runs.emplace_back(first, w);
+      const hsize_t row =
+          static_cast<hsize_t>(b) * static_cast<hsize_t>(whole_rows) + static_cast<hsize_t>(ids[i]);
+      runs.add(row * w, w);
     }
-  for (const auto& [first, len] : runs) {
-    const hsize_t start[1] = {first}, cnt[1] = {len};
-    ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, cnt, nullptr) >= 0;
-  }
-  const hsize_t m = static_cast<hsize_t>(blocks) * count * w, mdim = std::max<hsize_t>(m, 1);
-  Id mspace(H5Screate_simple(1, &mdim, nullptr), H5Sclose);
-  ok = ok && mspace.ok() && (m > 0 || H5Sselect_none(mspace.get()) >= 0);
+  const hsize_t m = static_cast<hsize_t>(blocks) * count * w;
+  Id mspace = h5::memory_space(m);
+  const bool ok = h5::select_runs(fspace.get(), runs) && mspace.ok();
   std::vector<double> f(integer ? 0 : std::max<hsize_t>(m, 1));
   std::vector<long long> l(integer ? std::max<hsize_t>(m, 1) : 0);
   if (!ok || H5Dread(d.get(), integer ? H5T_NATIVE_LLONG : H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(),
@@ -237,6 +198,20 @@ std::vector<double> read_rows(const StateArrays& s, const std::string& name, con
       at += w;
     }
   return out;
+}
+
+std::vector<uint64_t> sum_hashes_over_processes(const std::vector<uint64_t>& mine,
+                                                const std::function<void(double*, int)>& sum) {
+  std::vector<double> halves;
+  for (uint64_t x : mine) {
+    halves.push_back(static_cast<double>(x >> 32));
+    halves.push_back(static_cast<double>(x & 0xffffffffull));
+  }
+  sum(halves.data(), static_cast<int>(halves.size()));
+  std::vector<uint64_t> total(mine.size());
+  for (size_t k = 0; k < total.size(); ++k)
+    total[k] = (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+  return total;
 }
 
 bool rows_checksum_matches(const StateArrays& s, const std::string& name, uint64_t total) {

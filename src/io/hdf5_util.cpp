@@ -1,6 +1,8 @@
 #include "io/hdf5_util.hpp"
 
+#include <algorithm>
 #include <cstring>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -67,6 +69,40 @@ bool read_string_attr(hid_t loc, const char* name, std::string& out) {
   if (H5Aread(a.get(), t.get(), buf.data()) < 0) return false;
   out = buf.substr(0, std::strlen(buf.c_str()));
   return true;
+}
+
+std::vector<size_t> order_by(const int* ids, size_t n) {
+  std::vector<size_t> order(n);
+  std::iota(order.begin(), order.end(), size_t{0});
+  std::sort(order.begin(), order.end(), [ids](size_t a, size_t b) { return ids[a] < ids[b]; });
+  return order;
+}
+
+bool select_runs(hid_t space, const Runs& r) {
+  const int rank = H5Sget_simple_extent_ndims(space);
+  hsize_t dims[2] = {0, 1};
+  if (rank < 1 || rank > 2 || H5Sget_simple_extent_dims(space, dims, nullptr) < 0) return false;
+  bool ok = H5Sselect_none(space) >= 0;
+  for (const auto& [first, count] : r.runs) {
+    const hsize_t start[2] = {first, 0}, cnt[2] = {count, dims[1]};
+    ok = ok && H5Sselect_hyperslab(space, H5S_SELECT_OR, start, nullptr, cnt, nullptr) >= 0;
+  }
+  return ok;
+}
+
+Id memory_space(hsize_t n) {
+  const hsize_t dim = std::max<hsize_t>(n, 1);
+  Id space(H5Screate_simple(1, &dim, nullptr), H5Sclose);
+  if (space.ok() && n == 0 && H5Sselect_none(space.get()) < 0) return Id();
+  return space;
+}
+
+Id written_once() {
+  Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (dcpl.ok() && (H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
+                    H5Pset_alloc_time(dcpl.get(), H5D_ALLOC_TIME_EARLY) < 0))
+    return Id();
+  return dcpl;
 }
 
 void fail(const std::string& file, const std::string& what) {

@@ -5,6 +5,7 @@
 #include <hdf5.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fdem {
@@ -84,6 +85,29 @@ void write_scalar_attr(hid_t loc, const char* name, hid_t file_type, hid_t mem_t
 // Reads the fixed-length string attribute `name` of `loc` (up to its first NUL); false if it is
 // missing, unreadable or not a fixed-length string.
 bool read_string_attr(hid_t loc, const char* name, std::string& out);
+
+// A process's part of a dataset that every process of a run writes or reads its rows of
+// (src/io/snapshot_parallel.cpp, src/io/checkpoint_parallel.cpp):
+// Local rows 0..n-1 in increasing ids[i].
+std::vector<size_t> order_by(const int* ids, size_t n);
+// Runs of consecutive indices, (first, count); add() extends the last run where it ends at `first`.
+struct Runs {
+  std::vector<std::pair<hsize_t, hsize_t>> runs;
+  void add(hsize_t first, hsize_t count) {
+    if (!runs.empty() && runs.back().first + runs.back().second == first)
+      runs.back().second += count;
+    else
+      runs.emplace_back(first, count);
+  }
+};
+// Selects in `space` the runs' rows (rank 2: with all their columns) or values (rank 1); none when
+// there are no runs. False on an HDF5 error.
+bool select_runs(hid_t space, const Runs& r);
+// A one-dimensional memory space of n values (none selected when n is 0); not ok() on an error.
+Id memory_space(hsize_t n);
+// Creation properties of a dataset whose every value one process writes: allocated when created
+// (as parallel HDF5 needs), no fill values written; not ok() on an error.
+Id written_once();
 
 }  // namespace h5
 }  // namespace fdem

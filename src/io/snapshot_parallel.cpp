@@ -25,22 +25,14 @@ using h5::Id;
 
 // A process's own rows in increasing whole-mesh index, and the runs of consecutive indices.
 struct Rows {
-  std::vector<size_t> order;                         // local rows
-  std::vector<std::pair<hsize_t, hsize_t>> runs;     // (first whole index, length)
+  std::vector<size_t> order;  // local rows
+  h5::Runs runs;              // (first whole index, length)
 };
 
 Rows sorted_rows(const int* ids, size_t n) {
   Rows r;
-  r.order.resize(n);
-  std::iota(r.order.begin(), r.order.end(), size_t{0});
-  std::sort(r.order.begin(), r.order.end(), [ids](size_t a, size_t b) { return ids[a] < ids[b]; });
-  for (size_t k = 0; k < n; ++k) {
-    const hsize_t g = static_cast<hsize_t>(ids[r.order[k]]);
-    if (!r.runs.empty() && r.runs.back().first + r.runs.back().second == g)
-      ++r.runs.back().second;
-    else
-      r.runs.emplace_back(g, 1);
-  }
+  r.order = h5::order_by(ids, n);
+  for (size_t i : r.order) r.runs.add(static_cast<hsize_t>(ids[i]), 1);
   return r;
 }
 
@@ -66,23 +58,15 @@ void write_rows(const Target& t, const std::string& name, hid_t file_type, hid_t
   const hsize_t w = width ? width : 1;
   const hsize_t dims[2] = {whole, w};
   Id fspace(H5Screate_simple(width ? 2 : 1, dims, nullptr), H5Sclose);
-  Id dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
-  if (!fspace.ok() || !dcpl.ok() || H5Pset_fill_time(dcpl.get(), H5D_FILL_TIME_NEVER) < 0 ||
-      H5Pset_alloc_time(dcpl.get(), H5D_ALLOC_TIME_EARLY) < 0)
-    h5::fail(t.path, "cannot prepare dataset '" + name + "'");
+  Id dcpl = h5::written_once();
+  if (!fspace.ok() || !dcpl.ok()) h5::fail(t.path, "cannot prepare dataset '" + name + "'");
   Id dset(H5Dcreate2(t.group, name.c_str(), file_type, fspace.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
           H5Dclose);
   if (!dset.ok()) h5::fail(t.path, "cannot create dataset '" + name + "'");
-  bool ok = H5Sselect_none(fspace.get()) >= 0;
-  for (const auto& [first, len] : r.runs) {
-    const hsize_t start[2] = {first, 0}, count[2] = {len, w};
-    ok = ok && H5Sselect_hyperslab(fspace.get(), H5S_SELECT_OR, start, nullptr, count, nullptr) >= 0;
-  }
   const hsize_t n = static_cast<hsize_t>(r.order.size()) * w;
-  const hsize_t mdims[1] = {std::max<hsize_t>(n, 1)};
-  Id mspace(H5Screate_simple(1, mdims, nullptr), H5Sclose);
-  ok = ok && mspace.ok() && (n > 0 || H5Sselect_none(mspace.get()) >= 0);
-  if (!ok) h5::fail(t.path, "cannot select this process's rows of '" + name + "'");
+  Id mspace = h5::memory_space(n);
+  if (!h5::select_runs(fspace.get(), r.runs) || !mspace.ok())
+    h5::fail(t.path, "cannot select this process's rows of '" + name + "'");
   static const double none = 0;
   if (H5Dwrite(dset.get(), mem_type, mspace.get(), fspace.get(), t.dxpl, n > 0 ? packed : &none) < 0)
     h5::fail(t.path, "cannot write dataset '" + name + "'");
@@ -153,7 +137,7 @@ void ParallelFrames::write(const std::string& dir, const FramePart& f) const {
 
   if (f.has_fragment) {  // process 0 holds every element's id (the fragment analysis is its own)
     Rows all;
-    if (f.fragment && ne > 0) all.runs.emplace_back(0, ne);
+    if (f.fragment && ne > 0) all.runs.add(0, ne);
     all.order.resize(f.fragment ? static_cast<size_t>(ne) : 0);
     std::iota(all.order.begin(), all.order.end(), size_t{0});
     write_rows(t, "fragment", H5T_STD_I32LE, H5T_NATIVE_INT, ne, 0, all, f.fragment);

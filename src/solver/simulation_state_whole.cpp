@@ -244,20 +244,15 @@ void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count
 }
 
 // The rows read by every process (load_state_whole): each row is one process's own, so the sum of
-// their checksum terms over the processes is the entry's checksum (exact: 32-bit halves summed as
-// doubles). The same verdict on every process.
+// their checksum terms over the processes is the entry's checksum. The same verdict on every
+// process.
 template <int D>
 void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
                                 const std::vector<uint64_t>& own_hash) const {
-  std::vector<double> halves;
-  for (uint64_t x : own_hash) {
-    halves.push_back(static_cast<double>(x >> 32));
-    halves.push_back(static_cast<double>(x & 0xffffffffull));
-  }
-  comm_->sum(halves.data(), static_cast<int>(halves.size()));
+  const std::vector<uint64_t> totals =
+      fdem::sum_hashes_over_processes(own_hash, [this](double* v, int n) { comm_->sum(v, n); });
   for (size_t k = 0; k < names.size(); ++k) {
-    const uint64_t total =
-        (static_cast<uint64_t>(halves[2 * k]) << 32) + static_cast<uint64_t>(halves[2 * k + 1]);
+    const uint64_t total = totals[k];
     if (!rows_checksum_matches(whole, names[k], total)) {
       char sum[32];
       std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(total));
