@@ -9,8 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/work_model.hpp"
 #include "mesh/mesh.hpp"
-#include "parallel/work_model.hpp"
 
 namespace fdem {
 

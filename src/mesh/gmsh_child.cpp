@@ -1,20 +1,34 @@
-// Gmsh in a child process, the transport (src/mesh/gmsh_io.cpp runs the child): the Extracted
-// mesh packed into bytes and back, the pipe written and read whole, the child's captured terminal
-// output cut to its last lines, its address space capped, a signal's name.
+// Gmsh in a child process (run_gmsh_isolated, gmsh_internal.hpp): the fork; the child's side (its
+// terminal output captured in a temporary file, its address space capped, the Gmsh session, its
+// answer through a pipe); the parent's side (the answer read, the child reaped, its errors and its
+// death turned into InputError, the session's times recorded); and the transport between them (the
+// Extracted mesh packed into bytes and back, the pipe written and read whole, the captured output
+// cut to its last lines, a signal's name). One concern: a Gmsh session that cannot take this
+// process down. The session itself is in gmsh_io.cpp.
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <exception>
 #include <fstream>
+#include <functional>
+#include <mutex>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common/error.hpp"
+#include "common/setup_times.hpp"
+#include "mesh/gmsh_internal.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
 
@@ -70,8 +84,6 @@ struct Unpacker {
     return s;
   }
 };
-
-}  // namespace
 
 void pack(std::string& b, const Extracted& ex) {
   const HostMesh& m = ex.mesh;
@@ -210,6 +222,155 @@ std::string signal_name(int sig) {
     default:
       return "signal " + std::to_string(sig);
   }
+}
+
+// ---- Gmsh in a child process ----
+// Gmsh can abort the whole process: an error thrown inside its OpenMP regions ends in
+// std::terminate (a .geo surface of zero area), and an assertion or an allocation failure in a
+// mesher does the same. So every Gmsh session runs in a forked child: it meshes, turns the model
+// into an Extracted, and sends that (or an error message) back through a pipe; its terminal output
+// (Gmsh's Info/Warning/Error lines, and what the C++ runtime prints when it aborts) goes to an
+// unlinked temporary file. The parent reads the pipe, reaps the child and, if the child died,
+// reports the signal with Gmsh's last messages as an InputError. The child's address space is
+// capped at the memory available (memory_budget.hpp), so that a mesh too large for the machine
+// stops Gmsh instead of the machine. Cost: one fork and a copy of the mesh through the pipe
+// (docs/developing.md, "Refusals").
+
+// Gmsh is one global state: one session at a time in this process (run_gmsh_isolated holds it).
+std::mutex& gmsh_mutex() {
+  static std::mutex m;
+  return m;
+}
+
+// The Gmsh session's times into the set-up phases: its meshing, extraction and the rest (the
+// child process, the copy of the mesh through the pipe) of `total` wall / cpu seconds.
+void record_gmsh_times(const GmshTimes& t, double total_wall, double total_cpu) {
+  if (t.trial[0] > 0) setup_times::add("gmsh_trial_meshes", t.trial[0], t.trial[1]);
+  setup_times::add("gmsh_meshing", t.mesh[0], t.mesh[1]);
+  setup_times::add("gmsh_extraction", t.extract[0], t.extract[1]);
+  setup_times::add("gmsh_process", std::max(0.0, total_wall - t.trial[0] - t.mesh[0] - t.extract[0]),
+                   std::max(0.0, total_cpu - t.trial[1] - t.mesh[1] - t.extract[1]));
+}
+
+// When the session started (after the lock): wall clock and this process's CPU seconds.
+struct SessionStart {
+  std::chrono::steady_clock::time_point wall0;
+  double cpu0;
+};
+
+// A pipe (fds: read end, write end) and a fork: the child's pid in the parent, 0 in the child; -1
+// (the pipe closed) when either fails.
+pid_t fork_with_pipe(int (&fds)[2]) {
+  pid_t pid = -1;
+  if (::pipe(fds) == 0) {
+    pid = ::fork();
+    if (pid < 0) {
+      ::close(fds[0]);
+      ::close(fds[1]);
+    }
+  }
+  return pid;
+}
+
+// No child could be made: work() in a Gmsh session in this process.
+Extracted run_in_this_process(std::FILE* log, const SessionStart& start,
+                              const std::function<Extracted()>& work) {
+  if (log) std::fclose(log);
+  GmshSession session(false);
+  Extracted ex = work();
+  record_gmsh_times(ex.times,
+                    std::chrono::duration<double>(std::chrono::steady_clock::now() - start.wall0).count(),
+                    setup_times::process_cpu_seconds() - start.cpu0);
+  return ex;
+}
+
+// The child: its terminal output into `log`, its address space capped, work() in a Gmsh session,
+// and "M" with the packed mesh, "E" with an InputError's message or "X" with another error
+// through the pipe. Never returns, never runs the parent's exit handlers.
+[[noreturn]] void run_child(const int (&fds)[2], std::FILE* log, const std::string& source,
+                            const std::string& doing, const std::function<Extracted()>& work) {
+  ::close(fds[0]);
+  if (log) {
+    ::dup2(::fileno(log), 1);
+    ::dup2(::fileno(log), 2);
+    std::setvbuf(stdout, nullptr, _IONBF, 0);
+    std::setvbuf(stderr, nullptr, _IONBF, 0);
+  }
+  cap_address_space();
+  std::string out;
+  try {
+    Extracted ex;
+    {
+      GmshSession session(log != nullptr);
+      ex = work();
+    }
+    out = "M";
+    pack(out, ex);
+  } catch (const InputError& e) {
+    out = std::string("E") + e.what();
+  } catch (const std::bad_alloc&) {
+    out = "E" + source + ": Gmsh ran out of memory while trying to " + doing + " (" +
+          std::to_string(available_memory().bytes / 1073741824.0) + " GiB available)";
+  } catch (const std::exception& e) {
+    out = std::string("X") + e.what();
+  } catch (...) {
+    out = "Xunknown error";
+  }
+  write_all(fds[1], out);
+  ::close(fds[1]);
+  ::_exit(0);
+}
+
+// The parent: reads the child's answer to the end, reaps the child and returns its mesh; its
+// error, or its death (the signal or exit status, the memory it used and Gmsh's last messages),
+// becomes InputError naming `source`.
+Extracted wait_for_child(pid_t pid, const int (&fds)[2], std::FILE* log, const SessionStart& start,
+                         const std::string& source, const std::string& doing) {
+  ::close(fds[1]);
+  const std::string data = read_all(fds[0]);
+  ::close(fds[0]);
+  int status = 0;
+  rusage ru{};
+  while (::wait4(pid, &status, 0, &ru) < 0 && errno == EINTR) {
+  }
+  const std::string excerpt = log_excerpt(log);
+  if (log) std::fclose(log);
+  setup_times::note_gmsh_peak(static_cast<double>(ru.ru_maxrss) * 1024.0);
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && !data.empty()) {
+    if (data[0] == 'E') throw InputError(data.substr(1));
+    if (data[0] == 'X') throw InputError(source + ": Gmsh could not " + doing + ": " + data.substr(1));
+    if (data[0] == 'M') {
+      Extracted ex = unpack(data);
+      record_gmsh_times(ex.times,
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start.wall0).count(),
+                        setup_times::process_cpu_seconds() - start.cpu0);  // the child's CPU time included
+      return ex;
+    }
+  }
+  std::string how = WIFSIGNALED(status) ? "was killed by " + signal_name(WTERMSIG(status))
+                                        : "exited with status " + std::to_string(WEXITSTATUS(status));
+  char mem[96];
+  std::snprintf(mem, sizeof mem, " after using %.3g GiB (%.3g GiB available)",
+                static_cast<double>(ru.ru_maxrss) / 1048576.0, available_memory().bytes / 1073741824.0);
+  throw InputError(source + ": Gmsh failed while trying to " + doing + ": the meshing process " + how + mem +
+                   (excerpt.empty() ? std::string() : "; Gmsh's last messages: " + excerpt));
+}
+
+}  // namespace
+
+// Phases: the lock and the start of the clocks, the fork, then the child's side and the parent's
+// (or, without a child, the session in this process).
+Extracted run_gmsh_isolated(const std::string& source, const std::string& doing,
+                            const std::function<Extracted()>& work) {
+  std::lock_guard<std::mutex> lock(gmsh_mutex());
+  const SessionStart start{std::chrono::steady_clock::now(), setup_times::process_cpu_seconds()};
+  std::fflush(nullptr);
+  std::FILE* log = std::tmpfile();
+  int fds[2];
+  const pid_t pid = fork_with_pipe(fds);
+  if (pid < 0) return run_in_this_process(log, start, work);
+  if (pid == 0) run_child(fds, log, source, doing, work);
+  return wait_for_child(pid, fds, log, start, source, doing);
 }
 
 }  // namespace fdem::mesh_detail

@@ -101,27 +101,31 @@ bool barycentric(const HostMesh& m, int e, const double* x, double* lam, double*
   return true;
 }
 
-}  // namespace
+// The used nodes, the body of each (-1 for an unused node) and the mean edge length.
+struct Bodies {
+  std::vector<char> used;
+  std::vector<int> body;
+  double h = 0;
+};
 
-BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
-  BodyCheck out;
+// Bodies: elements joined through shared nodes (a union-find); counts them in out.bodies.
+Bodies find_bodies(const HostMesh& mesh, BodyCheck& out) {
   const int d = mesh.dim, nn = mesh.num_nodes(), ne = mesh.num_elems();
-  if (ne == 0 || nn == 0) return out;
-  // bodies: elements joined through shared nodes
   UnionFind uf(nn);
-  std::vector<char> used(nn, 0);
+  Bodies b;
+  b.used.assign(nn, 0);
   double edge_sum = 0;
   long edges = 0;
   for (int e = 0; e < ne; ++e) {
     const int* n = &mesh.elems[static_cast<size_t>(e) * (d + 1)];
     for (int a = 0; a <= d; ++a) {
-      used[n[a]] = 1;
+      b.used[n[a]] = 1;
       uf.join(n[0], n[a]);
-      for (int b = a + 1; b <= d; ++b) {
+      for (int c = a + 1; c <= d; ++c) {
         double s = 0;
         for (int k = 0; k < d; ++k) {
           const double dx =
-              mesh.X[static_cast<size_t>(n[a]) * d + k] - mesh.X[static_cast<size_t>(n[b]) * d + k];
+              mesh.X[static_cast<size_t>(n[a]) * d + k] - mesh.X[static_cast<size_t>(n[c]) * d + k];
           s += dx * dx;
         }
         edge_sum += std::sqrt(s);
@@ -129,19 +133,24 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
       }
     }
   }
-  std::vector<int> body(nn, -1);
+  b.body.assign(nn, -1);
   for (int i = 0; i < nn; ++i)
-    if (used[i]) {
+    if (b.used[i]) {
       const int r = uf.find(i);
-      if (body[r] < 0) body[r] = out.bodies++;
-      body[i] = body[r];
+      if (b.body[r] < 0) b.body[r] = out.bodies++;
+      b.body[i] = b.body[r];
     }
-  const double h = edge_sum / static_cast<double>(edges);
-  if (!(h > 0) || !std::isfinite(h)) return out;
-  out.tolerance = 1e-6 * h;
+  b.h = edge_sum / static_cast<double>(edges);
+  return b;
+}
 
-  // duplicate nodes: used nodes closer than 1e-6 of the mean edge
-  HashGrid nodes{d, h, {}};
+// Duplicate nodes: used nodes closer than out.tolerance (1e-6 of the mean edge). A pair inside one
+// body is an error; a pair between separate bodies a warning.
+void check_duplicate_nodes(const HostMesh& mesh, const std::string& source, const Bodies& b, BodyCheck& out) {
+  const int d = mesh.dim, nn = mesh.num_nodes();
+  const std::vector<char>& used = b.used;
+  const std::vector<int>& body = b.body;
+  HashGrid nodes{d, b.h, {}};
   for (int i = 0; i < nn; ++i)
     if (used[i]) nodes.cells[HashGrid::key(nodes.cell_of(&mesh.X[static_cast<size_t>(i) * d]))].push_back(i);
   int split_a = -1, split_b = -1, touch_a = -1, touch_b = -1;
@@ -190,9 +199,12 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
                            std::to_string(touch_a) + " and " + std::to_string(touch_b) + " at " +
                            point(mesh, touch_a) +
                            "): the bodies touch there but are not joined; they interact only by contact");
-  if (out.bodies < 2) return out;
+}
 
-  // overlapping bodies: nodes inside an element of another body, deeper than the tolerance
+// Each element in every cell of size h that its bounding box touches (slivers spanning more than
+// 4096 cells left out).
+HashGrid element_grid(const HostMesh& mesh, double h) {
+  const int d = mesh.dim, ne = mesh.num_elems();
   HashGrid elems{d, h, {}};
   for (int e = 0; e < ne; ++e) {
     const int* n = &mesh.elems[static_cast<size_t>(e) * (d + 1)];
@@ -209,9 +221,19 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
       for (long long y = lo[1]; y <= hi[1]; ++y)
         for (long long z = lo[2]; z <= hi[2]; ++z) elems.cells[HashGrid::key({x, y, z})].push_back(e);
   }
+  return elems;
+}
+
+// Overlapping bodies: nodes inside an element of another body, deeper than the tolerance. An error
+// deeper than 1e-3 of the mean edge, else a warning.
+void check_overlapping_bodies(const HostMesh& mesh, const std::string& source, const Bodies& b,
+                              BodyCheck& out) {
+  const int d = mesh.dim, nn = mesh.num_nodes(), ne = mesh.num_elems();
+  const double h = b.h;
+  const HashGrid elems = element_grid(mesh, h);
   int deep_node = -1, deep_elem = -1;
   for (int i = 0; i < nn; ++i) {
-    if (!used[i]) continue;
+    if (!b.used[i]) continue;
     const double* xi = &mesh.X[static_cast<size_t>(i) * d];
     const auto it = elems.cells.find(HashGrid::key(elems.cell_of(xi)));
     if (it == elems.cells.end()) continue;
@@ -219,7 +241,7 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
     int elem_i = -1;
     for (int e : it->second) {
       const int* n = &mesh.elems[static_cast<size_t>(e) * (d + 1)];
-      if (body[n[0]] == body[i]) continue;
+      if (b.body[n[0]] == b.body[i]) continue;
       double lam[4], alt[4];
       if (!barycentric(mesh, e, xi, lam, alt)) continue;
       double depth = lam[0] * alt[0];  // distance to the element's nearest face
@@ -234,7 +256,7 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
       deep_elem = elem_i;
     }
   }
-  if (out.overlapping_nodes == 0) return out;
+  if (out.overlapping_nodes == 0) return;
   int node_elem = -1;  // an element of the node's own body, for its region
   for (int e = 0; e < ne && node_elem < 0; ++e)
     for (int a = 0; a <= d; ++a)
@@ -250,6 +272,22 @@ BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
     throw InputError(source + ": " + msg + " (allowed: overlaps up to 1e-3 of the mean edge, " +
                      fmt(1e-3 * h) + " m; move the bodies apart)");
   out.warnings.push_back(source + ": " + msg + " (below 1e-3 of the mean edge: a warning)");
+}
+
+}  // namespace
+
+// Three phases: the bodies (with the mean edge h), duplicate nodes, and (with two bodies or more)
+// overlapping bodies.
+BodyCheck check_bodies(const HostMesh& mesh, const std::string& source) {
+  BodyCheck out;
+  const int nn = mesh.num_nodes(), ne = mesh.num_elems();
+  if (ne == 0 || nn == 0) return out;
+  const Bodies b = find_bodies(mesh, out);
+  if (!(b.h > 0) || !std::isfinite(b.h)) return out;
+  out.tolerance = 1e-6 * b.h;
+  check_duplicate_nodes(mesh, source, b, out);
+  if (out.bodies < 2) return out;
+  check_overlapping_bodies(mesh, source, b, out);
   return out;
 }
 

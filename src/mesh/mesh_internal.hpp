@@ -65,21 +65,11 @@ struct Extracted {
 // element orientation. Throws InputError naming `source`.
 Extracted extract_model(int dim, const std::string& source);
 
-// Gmsh in a child process, the transport (gmsh_child.cpp): an Extracted appended to `b` as bytes
-// and read back; a pipe written / read to the end; the last lines of the child's captured output;
-// the child's address space capped at the memory available; the name of a signal.
-void pack(std::string& b, const Extracted& ex);
-Extracted unpack(const std::string& b);
-void write_all(int fd, const std::string& b);
-std::string read_all(int fd);
-std::string log_excerpt(std::FILE* log);
-void cap_address_space();
-std::string signal_name(int sig);
-
 // A generated mesh through Gmsh (gmsh_io.cpp): build() adds the model (geometry and physical
-// groups) in a Gmsh session in a child process; then the size h (Delaunay in 2D, algorithm3d in 3D),
-// meshing in `dim`, extraction, the check that Gmsh honoured h, positive orientation and the element
-// checks. Gmsh's errors become InputError naming `who` ("could not <doing>").
+// groups) in a Gmsh session in a child process (gmsh_child.cpp); then the size h (Delaunay in 2D,
+// algorithm3d in 3D), meshing in `dim`, extraction, the check that Gmsh honoured h (gmsh_sizes.cpp),
+// positive orientation and the element checks. Gmsh's errors become InputError naming `who` ("could
+// not <doing>").
 HostMesh generate_with_gmsh(const std::string& who, const std::string& doing, int dim, double h,
                             int algorithm3d, const std::function<void()>& build);
 

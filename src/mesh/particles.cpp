@@ -132,7 +132,10 @@ double hull_volume(const std::vector<double>& p, const std::vector<int>& tris) {
   return v;
 }
 
-Placement place_particles(const ParticleSpec& s, const std::string& who) {
+namespace {
+
+// The spec's keys in range; throws InputError naming `who`.
+void check_particle_spec(const ParticleSpec& s, const std::string& who) {
   if (s.count < 1 || s.count > 100000)
     throw InputError(who + ": count must be in 1 .. 100000 (got " + std::to_string(s.count) + ")");
   if (!(s.rmin > 0) || !(s.rmax >= s.rmin) || !std::isfinite(s.rmax))
@@ -148,11 +151,13 @@ Placement place_particles(const ParticleSpec& s, const std::string& who) {
   for (int k = 0; k < 3; ++k)
     if (!(s.box_size[k] > 0) || !std::isfinite(s.box_size[k]))
       throw InputError(who + ": box.size must be positive in x, y and z");
-  Rng rng(s.seed);
-  Placement out;
-  std::vector<Particle>& ps = out.particles;
-  ps.resize(s.count);
-  for (Particle& p : ps) {  // shapes first, then positions: a larger box keeps the shapes
+}
+
+// Sizes, orientations and shapes of s.count particles drawn from `rng`, the largest bounding
+// sphere first (shapes before positions: a larger box keeps the shapes).
+std::vector<Particle> draw_shapes(const ParticleSpec& s, Rng& rng, const std::string& who) {
+  std::vector<Particle> ps(s.count);
+  for (Particle& p : ps) {
     p.radius = s.rmin == s.rmax ? s.rmin : rng.uniform(s.rmin, s.rmax);
     p.rot = random_rotation(rng);
     if (s.shape == "sphere") {
@@ -170,24 +175,70 @@ Placement place_particles(const ParticleSpec& s, const std::string& who) {
   }
   std::stable_sort(ps.begin(), ps.end(),
                    [](const Particle& a, const Particle& b) { return a.bound > b.bound; });
+  return ps;
+}
+
+// Grid over the box of cells at least one largest interaction distance (`reach`) wide: a
+// particle's neighbours lie in the 27 cells around its own. Each cell lists the particles placed
+// in it.
+struct CellGrid {
+  std::array<double, 3> origin{};
+  std::array<int, 3> nc{};
+  std::array<double, 3> cell{};
+  std::vector<std::vector<int>> cells;
+  CellGrid(const ParticleSpec& s, double reach) : origin(s.box_origin) {
+    for (int k = 0; k < 3; ++k) {
+      nc[k] = std::max(1, std::min(200, static_cast<int>(s.box_size[k] / reach)));
+      cell[k] = s.box_size[k] / nc[k];
+    }
+    cells.resize(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2]);
+  }
+  int cell_of(const std::array<double, 3>& x, int k) const {
+    return std::min(nc[k] - 1, std::max(0, static_cast<int>((x[k] - origin[k]) / cell[k])));
+  }
+  std::size_t index(int x, int y, int z) const {
+    return (static_cast<std::size_t>(z) * nc[1] + y) * nc[0] + x;
+  }
+  // Particle i, centred at x, listed in its cell.
+  void add(int i, const std::array<double, 3>& x) {
+    cells[index(cell_of(x, 0), cell_of(x, 1), cell_of(x, 2))].push_back(i);
+  }
+};
+
+// Whether `p` keeps at least `gap` of clearance (by bounding spheres) from every particle of `ps`
+// placed in `grid`.
+bool is_free(const CellGrid& grid, const std::vector<Particle>& ps, const Particle& p, double gap) {
+  const auto& nc = grid.nc;
+  const int cx = grid.cell_of(p.centre, 0), cy = grid.cell_of(p.centre, 1), cz = grid.cell_of(p.centre, 2);
+  bool free = true;
+  for (int x = std::max(0, cx - 1); free && x <= std::min(nc[0] - 1, cx + 1); ++x)
+    for (int y = std::max(0, cy - 1); free && y <= std::min(nc[1] - 1, cy + 1); ++y)
+      for (int z = std::max(0, cz - 1); free && z <= std::min(nc[2] - 1, cz + 1); ++z)
+        for (int j : grid.cells[grid.index(x, y, z)]) {
+          const Particle& q = ps[j];
+          double d2 = 0;
+          for (int k = 0; k < 3; ++k) d2 += (p.centre[k] - q.centre[k]) * (p.centre[k] - q.centre[k]);
+          const double need = p.bound + q.bound + gap;
+          if (d2 < need * need) {
+            free = false;
+            break;
+          }
+        }
+  return free;
+}
+
+// Random sequential addition: each particle of out.particles in turn (largest first) at random
+// centres in the box until one is free; fills the volume fractions. Throws InputError naming
+// `who` when the largest particle does not fit in the box or when a particle finds no place.
+void place_by_random_addition(const ParticleSpec& s, Rng& rng, Placement& out, const std::string& who) {
+  std::vector<Particle>& ps = out.particles;
   const double bmax = ps.front().bound;
   for (int k = 0; k < 3; ++k)
     if (s.box_size[k] < 2 * bmax)
       throw InputError(who + ": the largest particle (bounding radius " + fmt(bmax) +
                        " m) does not fit in box.size " + fmt(s.box_size[k]) + " m along " + "xyz"[k] +
                        "; give a larger mesh.box or smaller mesh.radius");
-  // grid of cells at least one largest interaction distance wide: neighbours lie in the 27 cells
-  const double reach = 2 * bmax + s.gap;
-  std::array<int, 3> nc{};
-  std::array<double, 3> cell{};
-  for (int k = 0; k < 3; ++k) {
-    nc[k] = std::max(1, std::min(200, static_cast<int>(s.box_size[k] / reach)));
-    cell[k] = s.box_size[k] / nc[k];
-  }
-  std::vector<std::vector<int>> grid(static_cast<std::size_t>(nc[0]) * nc[1] * nc[2]);
-  auto cell_of = [&](const std::array<double, 3>& x, int k) {
-    return std::min(nc[k] - 1, std::max(0, static_cast<int>((x[k] - s.box_origin[k]) / cell[k])));
-  };
+  CellGrid grid(s, 2 * bmax + s.gap);
   const long max_tries = 20000;
   double vsolid = 0, vbound = 0;
   const double vbox = s.box_size[0] * s.box_size[1] * s.box_size[2];
@@ -197,23 +248,8 @@ Placement place_particles(const ParticleSpec& s, const std::string& who) {
     for (long t = 0; t < max_tries && !placed; ++t) {
       for (int k = 0; k < 3; ++k)
         p.centre[k] = rng.uniform(s.box_origin[k] + p.bound, s.box_origin[k] + s.box_size[k] - p.bound);
-      const int cx = cell_of(p.centre, 0), cy = cell_of(p.centre, 1), cz = cell_of(p.centre, 2);
-      bool free = true;
-      for (int x = std::max(0, cx - 1); free && x <= std::min(nc[0] - 1, cx + 1); ++x)
-        for (int y = std::max(0, cy - 1); free && y <= std::min(nc[1] - 1, cy + 1); ++y)
-          for (int z = std::max(0, cz - 1); free && z <= std::min(nc[2] - 1, cz + 1); ++z)
-            for (int j : grid[(static_cast<std::size_t>(z) * nc[1] + y) * nc[0] + x]) {
-              const Particle& q = ps[j];
-              double d2 = 0;
-              for (int k = 0; k < 3; ++k) d2 += (p.centre[k] - q.centre[k]) * (p.centre[k] - q.centre[k]);
-              const double need = p.bound + q.bound + s.gap;
-              if (d2 < need * need) {
-                free = false;
-                break;
-              }
-            }
-      if (free) {
-        grid[(static_cast<std::size_t>(cz) * nc[1] + cy) * nc[0] + cx].push_back(i);
+      if (is_free(grid, ps, p, s.gap)) {
+        grid.add(i, p.centre);
         placed = true;
       }
     }
@@ -229,6 +265,17 @@ Placement place_particles(const ParticleSpec& s, const std::string& who) {
   }
   out.solid_fraction = vsolid / vbox;
   out.bound_fraction = vbound / vbox;
+}
+
+}  // namespace
+
+// Three phases: the spec's checks, the shapes, their placement.
+Placement place_particles(const ParticleSpec& s, const std::string& who) {
+  check_particle_spec(s, who);
+  Rng rng(s.seed);
+  Placement out;
+  out.particles = draw_shapes(s, rng, who);
+  place_by_random_addition(s, rng, out, who);
   return out;
 }
 

@@ -2,7 +2,7 @@
 // Domain decomposition of a host mesh after interface insertion (issue 20, docs/parallel.md): from
 // a part id per element (partition.hpp), each part's own share of the mesh with the ghost layer it
 // needs to compute its nodes' forces alone, and the lists of the per-step exchange of ghost node
-// states between parts. Host only; the device side of the exchange is parallel/halo.hpp.
+// states between parts. Host only; the device side of the exchange is kernels/halo.hpp.
 //
 // Ownership. An element belongs to its part. A node belongs to the part of the first (lowest
 // index) element that holds it: after insertion a node of a fracturable region has one element, so

@@ -9,7 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "parallel/work_model.hpp"
+#include "io/work_model.hpp"
 
 namespace fdem {
 

@@ -1,4 +1,4 @@
-// The work of each element in the work model of a run over processes (work_model.hpp: WorkModel;
+// The work of each element in the work model of a run over processes (io/work_model.hpp: WorkModel;
 // partition.hpp: element_work; docs/parallel.md "Rebalancing").
 #include <string>
 #include <vector>

@@ -2,11 +2,12 @@
 // Host topology of the contact surfaces, from the mesh (docs/theory.md section 6b), computed once
 // by the ContactSystem constructor (solver/contact_system.cpp): the faces that can become
 // surfaces, with their nodes, owner elements and interfaces; each face's share of its nodes'
-// areas; the vertex groups of the copies of one mesh vertex; the number of bodies.
+// areas; the vertex groups of the copies of one mesh vertex (the number of bodies: mesh/pieces.hpp).
 #include <vector>
 
 #include "io/case.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/pieces.hpp"  // count_bodies
 
 namespace fdem {
 
@@ -34,9 +35,6 @@ struct HostVertexGroups {
   std::vector<int> vgrp, off, ent, copy_off, copy;
   int n = 0;
 };
-
-// Connected pieces of the mesh: elements joined by shared nodes or by interfaces.
-int count_bodies(const HostMesh& mesh);
 
 // The 'enabled' rule of the case's contact object: on/off as given; "auto" (default): on when the
 // mesh has interfaces or more than one body (connected piece of elements).

@@ -1,5 +1,6 @@
-// `fdem partition` (partition.hpp: partition_case): the case's mesh as a run prepares it, its
-// partition, the statistics, and the files partition.json and partition.vtk.
+// `fdem partition` (parallel/partition.hpp: partition_case): the case's mesh as a run prepares it
+// (prepare_mesh, solver/run.hpp: hence here, above src/parallel), its partition, the statistics,
+// and the files partition.json and partition.vtk.
 #include <algorithm>
 #include <chrono>
 #include <numeric>

@@ -7,7 +7,8 @@
 // surface points (31 ns a unit), the force pass 2.6 ms for 12 577 tetrahedra and 23 898
 // interfaces, 3 134 of them handed over (the model: 2.62 ms); the node update about 11 ns a node on
 // large meshes (docs/performance.md). Another machine or backend (a GPU) sets its own in the case
-// (parallel.work_model, docs/case-format.md).
+// (parallel.work_model, docs/case-format.md). A case setting (Case::work_model, io/case.hpp), read
+// by the balance and the weighted cut (parallel/partition.hpp: element_work).
 
 namespace fdem {
 
