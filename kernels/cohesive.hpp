@@ -37,6 +37,15 @@ inline CohesiveParams cohesive_params_from_array(const double* a) {
 struct CohesivePoint {
   double dmax, dm0, dmf, wd;
 };
+// Values of one point's history as stored: the last extent of Model::ihist (its columns in the
+// order of load_point / store_point, kernels/model.hpp).
+constexpr int kPointHistory = 4;
+static_assert(sizeof(CohesivePoint) == kPointHistory * sizeof(double),
+              "CohesivePoint is kPointHistory doubles");
+
+// The history of a point that starts failed (a frictional joint's: src/solver/model_builder.cpp):
+// damage 1 (cohesive_damage: dmax >= dmf > dm0 > 0), nothing dissipated.
+KOKKOS_INLINE_FUNCTION CohesivePoint failed_point() { return CohesivePoint{2e-300, 1e-300, 2e-300, 0.0}; }
 
 KOKKOS_INLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
   if (s.dm0 <= 0.0 || s.dmax <= s.dm0) return 0.0;

@@ -41,15 +41,14 @@ struct ForceKernel {
   // Interface q: its history and, while it carries, its forces.
   template <class Acc>
   KOKKOS_INLINE_FUNCTION void interface(const int q, Acc& acc) const {
+    // Model::icontact: 1 once the interface carries nothing (handed over to contact: its faces are
+    // in contact instead; or, without contact, come apart for good: interface_apart).
+    if (in.icontact(q)) return;
     const bool handover = in.contact_handover;
-    if (handover && in.icontact(q)) return;  // failed: its faces are in contact instead
     double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
     CohesivePoint h[D];
     gather_interface<D>(x, in.iface, q, xa, xb);
     for (int k = 0; k < D; ++k) h[k] = load_point(in.ihist, q, k);
-    // Model::icontact: 1 once the interface carries nothing (handed over to contact; or,
-    // without contact, come apart for good: interface_apart).
-    if (in.icontact(q)) return;
     const CohesiveParams p = PerIface ? in.params(q) : in.coh;
     if (interface_apart<D>(xa, xb, h)) {
       interface_fail_all<D>(xa, xb, in.iarea(q), p, h);

@@ -44,7 +44,7 @@ KOKKOS_INLINE_FUNCTION int fragment_bin(double fraction) {
 
 // True when every integration point of interface q has damage 1.
 template <int D>
-KOKKOS_INLINE_FUNCTION bool interface_failed(const Kokkos::View<double* [D][4]>& ihist, int q) {
+KOKKOS_INLINE_FUNCTION bool interface_failed(const Kokkos::View<double* [D][kPointHistory]>& ihist, int q) {
   for (int k = 0; k < D; ++k) {
     const CohesivePoint h = load_point(ihist, q, k);
     if (cohesive_damage(h) < 1.0) return false;

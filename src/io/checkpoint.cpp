@@ -137,6 +137,99 @@ std::string root_checksum(const CheckpointHeader& h, int version,
 
 namespace {
 
+// visit_link's phases for one dataset: a dataset by rows left in the file (its stored checksum
+// only), or its values read, their checksum computed and compared with the stored one. Each
+// returns -1 with vd.error set on failure (H5Lvisit's stop), else 0.
+
+// A dataset by rows that read_checkpoint leaves in the file (skip_rows).
+bool left_by_rows(hid_t d, const VisitData& vd) {
+  int rows_width = 0;
+  return vd.skip_rows && h5::read_scalar_attr(d, kRowsAttr, H5T_NATIVE_INT, rows_width) && rows_width > 0;
+}
+
+herr_t record_rows_checksum(hid_t d, const char* name, VisitData& vd) {
+  std::string stored;
+  if (!h5::read_string_attr(d, kChecksum, stored)) {
+    vd.error = std::string("dataset '") + name + "' has no checksum";
+    return -1;
+  }
+  vd.s->by_rows[name] = stored;  // (its rows are read and verified by their owners: read_rows)
+  vd.checksums[name] = stored;
+  return 0;
+}
+
+// The values into vd.s (f64, i64 or str by the dataset's class); cls and n: its class and size.
+herr_t read_values(hid_t d, const char* name, VisitData& vd, H5T_class_t& cls, hssize_t& n) {
+  Id sp(H5Dget_space(d), H5Sclose);
+  Id t(H5Dget_type(d), H5Tclose);
+  if (!sp.ok() || !t.ok()) {
+    vd.error = std::string("cannot read '") + name + "'";
+    return -1;
+  }
+  n = H5Sget_simple_extent_npoints(sp.get());
+  cls = H5Tget_class(t.get());
+  herr_t rc = 0;
+  if (cls == H5T_FLOAT) {
+    auto& v = vd.s->f64[name];
+    v.resize(static_cast<size_t>(n));
+    if (n > 0) rc = H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  } else if (cls == H5T_INTEGER) {
+    auto& v = vd.s->i64[name];
+    v.resize(static_cast<size_t>(n));
+    if (n > 0) rc = H5Dread(d, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
+  } else if (cls == H5T_STRING && H5Tis_variable_str(t.get()) <= 0 && n == 1) {
+    std::string buf(H5Tget_size(t.get()), '\0');
+    rc = H5Dread(d, t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data());
+    vd.s->str[name] = buf.substr(0, std::strlen(buf.c_str()));
+  } else {
+    vd.error = std::string("dataset '") + name + "' has an unexpected type";
+    return -1;
+  }
+  if (rc < 0) {
+    vd.error = std::string("cannot read '") + name + "'";
+    return -1;
+  }
+  return 0;
+}
+
+// The checksum of the values read (a flipped bit in the data reads back without an HDF5 error):
+// of the rows (written by every process of a run: checkpoint_internal.hpp) or of the bytes.
+std::string read_values_checksum(hid_t d, const char* name, const VisitData& vd, H5T_class_t cls,
+                                 hssize_t n) {
+  int width = 0;
+  if (h5::read_scalar_attr(d, kRowsAttr, H5T_NATIVE_INT, width) && width > 0 && cls != H5T_STRING) {
+    const void* p = cls == H5T_FLOAT ? static_cast<const void*>(vd.s->f64[name].data())
+                                     : static_cast<const void*>(vd.s->i64[name].data());
+    const size_t w = static_cast<size_t>(width);
+    return hex(rows_hash(p, static_cast<size_t>(n) / w, 8 * w, 0));
+  } else if (cls == H5T_FLOAT) {
+    const auto& v = vd.s->f64[name];
+    return values_checksum(v.data(), v.size() * sizeof(double));
+  } else if (cls == H5T_INTEGER) {
+    const auto& v = vd.s->i64[name];
+    return values_checksum(v.data(), v.size() * sizeof(long long));
+  } else {
+    const auto& v = vd.s->str[name];
+    return values_checksum(v.data(), v.size());
+  }
+}
+
+herr_t verify_checksum(hid_t d, const char* name, const std::string& sum, VisitData& vd) {
+  std::string stored;
+  if (!h5::read_string_attr(d, kChecksum, stored)) {
+    vd.error = std::string("dataset '") + name + "' has no checksum";
+    return -1;
+  }
+  if (stored != sum) {
+    vd.error = std::string("dataset '") + name + "' fails its checksum (stored " + stored + ", computed " +
+               sum + ")";
+    return -1;
+  }
+  vd.checksums[name] = sum;
+  return 0;
+}
+
+// H5Lvisit's callback: every dataset of the file into vd->s, verified against its checksum.
 herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) {
   auto* vd = static_cast<VisitData*>(data);
   Id obj(H5Oopen(group, name, H5P_DEFAULT), H5Oclose);
@@ -146,77 +239,11 @@ herr_t visit_link(hid_t group, const char* name, const H5L_info_t*, void* data) 
   }
   if (H5Iget_type(obj.get()) != H5I_DATASET) return 0;
   const hid_t d = obj.get();
-  int rows_width = 0;
-  if (vd->skip_rows && h5::read_scalar_attr(d, kRowsAttr, H5T_NATIVE_INT, rows_width) && rows_width > 0) {
-    std::string stored;
-    if (!h5::read_string_attr(d, kChecksum, stored)) {
-      vd->error = std::string("dataset '") + name + "' has no checksum";
-      return -1;
-    }
-    vd->s->by_rows[name] = stored;  // (its rows are read and verified by their owners: read_rows)
-    vd->checksums[name] = stored;
-    return 0;
-  }
-  Id sp(H5Dget_space(d), H5Sclose);
-  Id t(H5Dget_type(d), H5Tclose);
-  if (!sp.ok() || !t.ok()) {
-    vd->error = std::string("cannot read '") + name + "'";
-    return -1;
-  }
-  const hssize_t n = H5Sget_simple_extent_npoints(sp.get());
-  const H5T_class_t cls = H5Tget_class(t.get());
-  herr_t rc = 0;
-  if (cls == H5T_FLOAT) {
-    auto& v = vd->s->f64[name];
-    v.resize(static_cast<size_t>(n));
-    if (n > 0) rc = H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  } else if (cls == H5T_INTEGER) {
-    auto& v = vd->s->i64[name];
-    v.resize(static_cast<size_t>(n));
-    if (n > 0) rc = H5Dread(d, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data());
-  } else if (cls == H5T_STRING && H5Tis_variable_str(t.get()) <= 0 && n == 1) {
-    std::string buf(H5Tget_size(t.get()), '\0');
-    rc = H5Dread(d, t.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data());
-    vd->s->str[name] = buf.substr(0, std::strlen(buf.c_str()));
-  } else {
-    vd->error = std::string("dataset '") + name + "' has an unexpected type";
-    return -1;
-  }
-  if (rc < 0) {
-    vd->error = std::string("cannot read '") + name + "'";
-    return -1;
-  }
-  // the checksum of the values read (a flipped bit in the data reads back without an HDF5 error):
-  // of the rows (written by every process of a run: checkpoint_internal.hpp) or of the bytes
-  std::string sum;
-  int width = 0;
-  if (h5::read_scalar_attr(d, kRowsAttr, H5T_NATIVE_INT, width) && width > 0 && cls != H5T_STRING) {
-    const void* p = cls == H5T_FLOAT ? static_cast<const void*>(vd->s->f64[name].data())
-                                     : static_cast<const void*>(vd->s->i64[name].data());
-    const size_t w = static_cast<size_t>(width);
-    sum = hex(rows_hash(p, static_cast<size_t>(n) / w, 8 * w, 0));
-  } else if (cls == H5T_FLOAT) {
-    const auto& v = vd->s->f64[name];
-    sum = values_checksum(v.data(), v.size() * sizeof(double));
-  } else if (cls == H5T_INTEGER) {
-    const auto& v = vd->s->i64[name];
-    sum = values_checksum(v.data(), v.size() * sizeof(long long));
-  } else {
-    const auto& v = vd->s->str[name];
-    sum = values_checksum(v.data(), v.size());
-  }
-  std::string stored;
-  if (!h5::read_string_attr(d, kChecksum, stored)) {
-    vd->error = std::string("dataset '") + name + "' has no checksum";
-    return -1;
-  }
-  if (stored != sum) {
-    vd->error = std::string("dataset '") + name + "' fails its checksum (stored " + stored + ", computed " +
-                sum + ")";
-    return -1;
-  }
-  vd->checksums[name] = sum;
-  return 0;
+  if (left_by_rows(d, *vd)) return record_rows_checksum(d, name, *vd);
+  H5T_class_t cls = H5T_NO_CLASS;
+  hssize_t n = 0;
+  if (read_values(d, name, *vd, cls, n) < 0) return -1;
+  return verify_checksum(d, name, read_values_checksum(d, name, *vd, cls, n), *vd);
 }
 
 }  // namespace

@@ -38,11 +38,11 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   m.contact_handover = true;
   m.handover_slip = law.dpen;
   m.icontact_pending = Kokkos::View<int>(std::string(kContactSyncLabel) + "::icontact_pending");
-  // Failed, parted interfaces are handed over every 25 steps (a failed interface keeps its
-  // compression penalty until then): each handover refreshes the surfaces and updates the
+  // Failed, parted interfaces are handed over every kContactPollEvery steps (a failed interface
+  // keeps its compression penalty until then): each handover refreshes the surfaces and updates the
   // candidate lists by a local search (update_lists; docs/performance-impact.md section 2). On
   // GPUs the check also costs a copy of the pending flag to the host.
-  check_every_ = 25;
+  check_every_ = kContactPollEvery;
   if (m.ifric.extent(0) > 0) {  // frictional joints, handed over from the start: their own friction
     surf_.fmu = Kokkos::View<double*>("fdem::contact::fmu", nf_);
     joint_friction_ = joint_face_friction<D>(surf_, m.ifric, nf_) > 0;
@@ -61,11 +61,11 @@ void ContactSystem<D>::set_law(const Case& c, const HostMesh& mesh) {
   law.ks = c.contact.ks;
   law.mu = c.contact.friction;
   law.coh = c.contact.cohesion;
-  // A node deeper than a quarter of the thinnest element behind a face is not in contact with it
-  // (it would be nearer the face's back side); coplanar faces are within 30 degrees.
+  // Penetration depth: a quarter of the thinnest element (contact_penetration_depth); coplanar
+  // faces are within 30 degrees.
   // (a part of a decomposed mesh: the whole mesh's thinnest element, as on one process)
   const double min_size = mesh.owned_nodes >= 0 ? mesh.whole_min_size : mq.min_size;
-  law.dpen = 0.25 * (min_size > 0 ? min_size : hmean);
+  law.dpen = contact_penetration_depth(min_size, hmean);
   law.tol = 0.01;
   law.cos_same = std::cos(30.0 * M_PI / 180.0);
   skin = c.contact.skin;
@@ -394,15 +394,14 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
 // pass's plus K such steps.
 template <int D>
 void ContactSystem<D>::recheck(double dt) {
-  constexpr int kMaxRecheck = 25;
-  until_recheck_ = kMaxRecheck;
+  until_recheck_ = kMaxRecheckInterval;
   const ContactStatus st = read_status();
   ++syncs_;
   const double d = std::sqrt(st.d2max), step = 2.0 * std::sqrt(st.v2max) * dt, half = 0.5 * skin;
   need_build_ = d + step > half || st.stale > stale_seen_;
   stale_seen_ = st.stale;
   if (!need_build_ && step > 0)
-    until_recheck_ = static_cast<int>(std::min<double>(kMaxRecheck, std::floor((half - d) / step)));
+    until_recheck_ = static_cast<int>(std::min<double>(kMaxRecheckInterval, std::floor((half - d) / step)));
 }
 
 template <int D>

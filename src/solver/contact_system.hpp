@@ -23,20 +23,21 @@
 // Synchronisation (GPU readiness): a step waits for the device only on the steps that re-check
 // something on the host; there the host reads one small device value, labelled kContactSyncLabel
 // (two on a step that both polls the handover flag and re-checks the lists).
-// - The handover flag (set by the force kernel) every 25 steps while interfaces are left. A step
-//   that hands interfaces over waits for the device like a rebuild (counts, sizes); after a local
-//   update of the lists (no rebuild), the next step re-checks them (its status includes the new
-//   surface nodes).
+// - The handover flag (set by the force kernel) every kContactPollEvery steps while interfaces are
+//   left. A step that hands interfaces over waits for the device like a rebuild (counts, sizes);
+//   after a local update of the lists (no rebuild), the next step re-checks them (its status
+//   includes the new surface nodes).
 // - The status of the narrow phase (ContactStatus: totals and the largest displacement since the
 //   build and the largest speed) on the steps the candidate lists are re-checked. A check at step s
 //   sees the pass of step s - 1 (displacement d, speed v): the lists are rebuilt when
 //   d + 2 v dt > skin / 2 (the test of every step before: the displacement at the next step is
 //   bounded by this one plus a step at twice the largest speed), else the next check comes after
-//   K = floor((skin / 2 - d) / (2 v dt)) steps (at most 25). While the speeds stay below twice v,
-//   no step in between meets the rebuild test, so the lists are rebuilt on the same steps as by a
-//   check on every step (checks come every step as the bound nears half the skin). Passes on
-//   outdated lists (a node beyond half the skin from its build position) are counted on the device
-//   (stale_passes) and lead to a rebuild at the next check.
+//   K = floor((skin / 2 - d) / (2 v dt)) steps (at most kMaxRecheckInterval; not tied to the poll
+//   of the handover flag). While the speeds stay below twice v, no step in between meets the
+//   rebuild test, so the lists are rebuilt on the same steps as by a check on every step (checks
+//   come every step as the bound nears half the skin). Passes on outdated lists (a node beyond half
+//   the skin from its build position) are counted on the device (stale_passes) and lead to a
+//   rebuild at the next check.
 // The energies and statistics read the status when asked (sampled steps).
 #include <memory>
 #include <vector>
@@ -52,6 +53,20 @@ namespace fdem {
 
 // Label of the device values the contact system reads on its re-check steps (tests/test_gpu_ready.cpp).
 inline constexpr char kContactSyncLabel[] = "fdem::contact::sync";
+
+// Steps between two polls of the handover flag (failed interfaces handed over to contact; on these
+// steps the processes of a decomposed run also check their contact zones). The zone-safety check
+// in src/solver/simulation_parallel.cpp (Simulation::agree_on_contact: a node may move 2 v dt per
+// step for this many steps until the next check) depends on it.
+inline constexpr int kContactPollEvery = 25;
+
+// The contact law's penetration depth (ContactLaw::dpen; also the contact zone's reach in
+// src/solver/run.cpp): a node deeper than a quarter of the thinnest element behind a face is not in
+// contact with it (it would be nearer the face's back side), so a quarter of the smallest element
+// size (the mean size where the mesh has no positive smallest size).
+inline double contact_penetration_depth(double min_size, double mean_size) {
+  return 0.25 * (min_size > 0 ? min_size : mean_size);
+}
 
 template <int D>
 class ContactSystem {
@@ -98,8 +113,8 @@ class ContactSystem {
   // it puts on ghost nodes go back to their owners); the others are followed for the Verlet test.
   // On one process: surface_nodes().
   int own_surface_nodes() const { return ns_own_; }
-  // Whether the last update() looked for failed interfaces (every 25 steps; a part does so on the
-  // same steps as every other part).
+  // Whether the last update() looked for failed interfaces (every kContactPollEvery steps; a part
+  // does so on the same steps as every other part).
   bool polled() const { return polled_; }
   int active_faces() const { return na_; }
   int candidates() const { return cur_.size; }
@@ -202,6 +217,10 @@ class ContactSystem {
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int until_recheck_ = 0;  // steps to the next re-check of the candidate lists (0: this step)
+  // The most steps between two re-checks of the candidate lists (recheck(); "Synchronisation"
+  // above): a bound on how long a speed that grows goes unseen. Equal to kContactPollEvery by
+  // choice only: nothing depends on the two being the same.
+  static constexpr int kMaxRecheckInterval = 25;
   double stale_seen_ = 0;  // stale passes at the last re-check
   long builds_ = 0, handed_ = 0, surface_version_ = 0, syncs_ = 0, updates_ = 0, checks_ = 0;
   std::vector<double> potential_area_;

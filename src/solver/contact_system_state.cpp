@@ -35,6 +35,117 @@ void visit_pairs(const PairList<D>& P, F&& f) {
   f("contact/pair_fs", Kokkos::subview(P.fs, used, Kokkos::ALL));
 }
 
+// ContactSystem::load_pair_rows's phases: the own nodes and the held faces by whole-mesh ids; the
+// rows of own nodes whose face this process holds; in the order of a search; into the lists.
+
+// Whole-mesh id -> own node (the first nown nodes; ids empty: one process, the ids are the nodes).
+std::unordered_map<long long, int> own_node_index(int nown, const std::vector<int>& ids) {
+  std::unordered_map<long long, int> node;
+  for (int i = 0; i < nown; ++i) node.emplace(ids.empty() ? i : ids[static_cast<size_t>(i)], i);
+  return node;
+}
+
+// Sorted whole-mesh vertex ids -> face.
+template <int D>
+using FaceIndex = std::map<std::array<long long, D>, int>;
+
+template <int D>
+FaceIndex<D> face_index(const Kokkos::View<int* [D]>& faces, const std::vector<int>& ids) {
+  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), faces);
+  FaceIndex<D> face_of;
+  for (int f = 0; f < static_cast<int>(fnode.extent(0)); ++f) {
+    std::array<long long, D> key;
+    for (int k = 0; k < D; ++k) key[k] = ids.empty() ? fnode(f, k) : ids[static_cast<size_t>(fnode(f, k))];
+    std::sort(key.begin(), key.end());
+    face_of.emplace(key, f);
+  }
+  return face_of;
+}
+
+// A row of "contact/pairs" this process takes: its own node, the face's place in a search's order
+// (its owner element with the pair filter, else 0), the face, and the row.
+struct SavedPair {
+  int node, order, face;
+  size_t row;
+};
+
+// The rows of the own nodes whose face this process holds (the others' faces dropped, with a note).
+template <int D>
+std::vector<SavedPair> own_saved_pairs(const std::string& file, const std::vector<double>& rows,
+                                       const std::unordered_map<long long, int>& node,
+                                       const FaceIndex<D>& face_of, bool use_owner,
+                                       const Kokkos::View<int*, Kokkos::HostSpace>& fowner) {
+  constexpr int W = ContactSystem<D>::kPairRow;
+  std::vector<SavedPair> pairs;
+  long lost = 0;
+  for (size_t r = 0; r < rows.size() / W; ++r) {
+    const double* v = &rows[r * W];
+    bool ok = true;
+    for (int k = 0; k <= D; ++k) ok = ok && v[k] >= 0 && v[k] < 2147483648.0 && v[k] == std::floor(v[k]);
+    if (!ok)
+      throw InputError("checkpoint '" + file + "': contact/pairs row " + std::to_string(r) +
+                       " has a node id that is not one (the file is damaged)");
+    const auto n = node.find(static_cast<long long>(v[0]));
+    if (n == node.end()) continue;  // another process's node
+    std::array<long long, D> key;
+    for (int k = 0; k < D; ++k) key[k] = static_cast<long long>(v[1 + k]);
+    const auto f = face_of.find(key);
+    if (f == face_of.end()) {
+      ++lost;
+      continue;
+    }
+    pairs.push_back({n->second, use_owner ? fowner(f->second) : 0, f->second, r});
+  }
+  if (lost > 0)  // (only when a node moved past the contact zone: the run's zone check stops such a run)
+    std::fprintf(
+        stderr, "fdem: restart: %ld contact histories with faces this process does not hold dropped\n", lost);
+  return pairs;
+}
+
+// Each node's segment in the order of a search (pair_order: owner element, then face); a pair held
+// twice is a damaged file.
+void sort_in_search_order(std::vector<SavedPair>& pairs, const std::string& file) {
+  std::sort(pairs.begin(), pairs.end(), [](const SavedPair& a, const SavedPair& b) {
+    return a.node != b.node ? a.node < b.node : (a.order != b.order ? a.order < b.order : a.face < b.face);
+  });
+  for (size_t j = 1; j < pairs.size(); ++j)
+    if (pairs[j].node == pairs[j - 1].node && pairs[j].face == pairs[j - 1].face)
+      throw InputError("checkpoint '" + file + "': contact/pairs holds a pair twice (the file is damaged)");
+}
+
+// The pairs with their histories from their rows into P (room for them reserved, P.size set): the
+// offsets by node, then the faces, forces, areas, gaps and shear forces.
+template <int D>
+void upload_saved_pairs(PairList<D>& P, const std::vector<SavedPair>& pairs,
+                        const std::vector<double>& rows) {
+  constexpr int W = ContactSystem<D>::kPairRow;
+  const int n = static_cast<int>(pairs.size());
+  const std::pair<int, int> used(0, n);
+  auto off = Kokkos::create_mirror_view(P.off);
+  auto face = Kokkos::create_mirror_view(Kokkos::subview(P.face, used));
+  auto fn = Kokkos::create_mirror_view(Kokkos::subview(P.fn, used));
+  auto ac = Kokkos::create_mirror_view(Kokkos::subview(P.ac, used));
+  auto g0 = Kokkos::create_mirror_view(Kokkos::subview(P.g0, used));
+  auto fs = Kokkos::create_mirror_view(Kokkos::subview(P.fs, used, Kokkos::ALL));
+  for (size_t i = 0; i < off.extent(0); ++i) off(i) = 0;
+  for (int j = 0; j < n; ++j) {
+    const double* v = &rows[pairs[j].row * W + 1 + D];
+    ++off(pairs[j].node + 1);
+    face(j) = pairs[j].face;
+    fn(j) = v[0];
+    ac(j) = v[1];
+    g0(j) = v[2];
+    for (int k = 0; k < D; ++k) fs(j, k) = v[3 + k];
+  }
+  for (size_t i = 1; i < off.extent(0); ++i) off(i) += off(i - 1);
+  Kokkos::deep_copy(P.off, off);
+  Kokkos::deep_copy(Kokkos::subview(P.face, used), face);
+  Kokkos::deep_copy(Kokkos::subview(P.fn, used), fn);
+  Kokkos::deep_copy(Kokkos::subview(P.ac, used), ac);
+  Kokkos::deep_copy(Kokkos::subview(P.g0, used), g0);
+  Kokkos::deep_copy(Kokkos::subview(P.fs, used, Kokkos::ALL), fs);
+}
+
 }  // namespace
 
 template <int D>
@@ -85,84 +196,20 @@ std::vector<double> ContactSystem<D>::pair_rows(const std::vector<int>& ids) con
 
 template <int D>
 void ContactSystem<D>::load_pair_rows(const StateArrays& s, const std::vector<int>& ids) {
-  constexpr int W = kPairRow;
   const std::vector<double>& rows = s.array("contact/pairs");
-  if (rows.size() % W != 0)
+  if (rows.size() % kPairRow != 0)
     throw InputError("checkpoint '" + s.file + "': contact/pairs has " + std::to_string(rows.size()) +
-                     " values, not rows of " + std::to_string(W) + " (the file is damaged)");
-  std::unordered_map<long long, int> node;  // whole-mesh id -> own node
-  for (int i = 0; i < nown_; ++i) node.emplace(ids.empty() ? i : ids[static_cast<size_t>(i)], i);
-  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode);
-  std::map<std::array<long long, D>, int> face_of;  // sorted whole-mesh vertex ids -> face
-  for (int f = 0; f < static_cast<int>(fnode.extent(0)); ++f) {
-    std::array<long long, D> key;
-    for (int k = 0; k < D; ++k) key[k] = ids.empty() ? fnode(f, k) : ids[static_cast<size_t>(fnode(f, k))];
-    std::sort(key.begin(), key.end());
-    face_of.emplace(key, f);
-  }
+                     " values, not rows of " + std::to_string(kPairRow) + " (the file is damaged)");
+  const std::unordered_map<long long, int> node = own_node_index(nown_, ids);
+  const FaceIndex<D> face_of = face_index<D>(surf_.fnode, ids);
   Kokkos::View<int*, Kokkos::HostSpace> fowner;
   if (filter_.use) fowner = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), filter_.fowner);
-  struct Pair {
-    int node, order, face;
-    size_t row;
-  };
-  std::vector<Pair> pairs;
-  long lost = 0;
-  for (size_t r = 0; r < rows.size() / W; ++r) {
-    const double* v = &rows[r * W];
-    bool ok = true;
-    for (int k = 0; k <= D; ++k) ok = ok && v[k] >= 0 && v[k] < 2147483648.0 && v[k] == std::floor(v[k]);
-    if (!ok)
-      throw InputError("checkpoint '" + s.file + "': contact/pairs row " + std::to_string(r) +
-                       " has a node id that is not one (the file is damaged)");
-    const auto n = node.find(static_cast<long long>(v[0]));
-    if (n == node.end()) continue;  // another process's node
-    std::array<long long, D> key;
-    for (int k = 0; k < D; ++k) key[k] = static_cast<long long>(v[1 + k]);
-    const auto f = face_of.find(key);
-    if (f == face_of.end()) {
-      ++lost;
-      continue;
-    }
-    pairs.push_back({n->second, filter_.use ? fowner(f->second) : 0, f->second, r});
-  }
-  if (lost > 0)  // (only when a node moved past the contact zone: the run's zone check stops such a run)
-    std::fprintf(stderr, "fdem: restart: %ld contact histories with faces this process does not hold dropped\n",
-                 lost);
-  // each node's segment in the order of a search (pair_order: owner element, then face)
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-    return a.node != b.node ? a.node < b.node : (a.order != b.order ? a.order < b.order : a.face < b.face);
-  });
-  for (size_t j = 1; j < pairs.size(); ++j)
-    if (pairs[j].node == pairs[j - 1].node && pairs[j].face == pairs[j - 1].face)
-      throw InputError("checkpoint '" + s.file + "': contact/pairs holds a pair twice (the file is damaged)");
+  std::vector<SavedPair> pairs = own_saved_pairs<D>(s.file, rows, node, face_of, filter_.use, fowner);
+  sort_in_search_order(pairs, s.file);
   const int n = static_cast<int>(pairs.size());
   reserve_pairs(cur_, std::max(n, 1));
   cur_.size = n;
-  const std::pair<int, int> used(0, n);
-  auto off = Kokkos::create_mirror_view(cur_.off);
-  auto face = Kokkos::create_mirror_view(Kokkos::subview(cur_.face, used));
-  auto fn = Kokkos::create_mirror_view(Kokkos::subview(cur_.fn, used));
-  auto ac = Kokkos::create_mirror_view(Kokkos::subview(cur_.ac, used));
-  auto g0 = Kokkos::create_mirror_view(Kokkos::subview(cur_.g0, used));
-  auto fs = Kokkos::create_mirror_view(Kokkos::subview(cur_.fs, used, Kokkos::ALL));
-  for (size_t i = 0; i < off.extent(0); ++i) off(i) = 0;
-  for (int j = 0; j < n; ++j) {
-    const double* v = &rows[pairs[j].row * W + 1 + D];
-    ++off(pairs[j].node + 1);
-    face(j) = pairs[j].face;
-    fn(j) = v[0];
-    ac(j) = v[1];
-    g0(j) = v[2];
-    for (int k = 0; k < D; ++k) fs(j, k) = v[3 + k];
-  }
-  for (size_t i = 1; i < off.extent(0); ++i) off(i) += off(i - 1);
-  Kokkos::deep_copy(cur_.off, off);
-  Kokkos::deep_copy(Kokkos::subview(cur_.face, used), face);
-  Kokkos::deep_copy(Kokkos::subview(cur_.fn, used), fn);
-  Kokkos::deep_copy(Kokkos::subview(cur_.ac, used), ac);
-  Kokkos::deep_copy(Kokkos::subview(cur_.g0, used), g0);
-  Kokkos::deep_copy(Kokkos::subview(cur_.fs, used, Kokkos::ALL), fs);
+  upload_saved_pairs<D>(cur_, pairs, rows);
   // the first update builds the lists at the current positions and carries these histories over
   need_build_ = true;
   until_recheck_ = 0;
