@@ -54,7 +54,7 @@ template <int D>
 struct NodeData {
   int nn = 0;
   // One part of a decomposed run (src/parallel/decompose.hpp): its first nn_own nodes are its own,
-  // the others ghosts, whose state comes from their owners after each step (src/parallel/halo.hpp):
+  // the others ghosts, whose state comes from their owners after each step (kernels/halo.hpp):
   // the node update and its sums cover the own nodes only. -1: all nodes are its own.
   int nn_own = -1;
   int owned_nodes() const { return nn_own < 0 ? nn : nn_own; }
@@ -87,14 +87,15 @@ struct ElementData {
 };
 
 // Interfaces: node pairs (A0..A{D-1}, B0..B{D-1}); per integration point (one per node pair) the
-// history dmax, dm0, dmf, wd (cohesive.hpp; read and written through load_point / store_point).
+// history dmax, dm0, dmf, wd (kPointHistory values, cohesive.hpp; read and written through
+// load_point / store_point).
 template <int D>
 struct InterfaceData {
   int ni = 0;
   int ni_own = -1;  // decomposed run: the counted interfaces come first (energies, counts); -1: all
   int owned_ifaces() const { return ni_own < 0 ? ni : ni_own; }
   Kokkos::View<int* [2 * D]> iface;
-  Kokkos::View<double* [D][4]> ihist;
+  Kokkos::View<double* [D][kPointHistory]> ihist;
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
   // Host backends, interfaces ordered by their side-A element: first interface of each chunk of
   // kChunk elements (ceil(ne / kChunk) + 1 entries); the force kernel then does each element
@@ -143,8 +144,8 @@ struct InterfaceData {
 
 // Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
 // surface node, including the faces of cracks handed over to contact during the run (the contact
-// system's surface nodes, see Simulation::sync_platen_nodes). Their tributary areas (barea) and
-// the platens' shear springs (platen_fs) are indexed by node id.
+// system's surface nodes, see Platens::follow_surfaces in src/solver/platens.cpp). Their
+// tributary areas (barea) and the platens' shear springs (platen_fs) are indexed by node id.
 template <int D>
 struct PlatenData {
   int nb = 0;
@@ -166,8 +167,8 @@ struct Model : NodeData<D>, ElementData<D>, InterfaceData<D>, PlatenData<D> {
 };
 
 // The cohesive history of integration point k of interface q (layout of Model::ihist: dmax, dm0,
-// dmf, wd; cohesive.hpp). The one place that knows the layout: kernels read and write the history
-// through these.
+// dmf, wd, kPointHistory columns; cohesive.hpp). The one place that knows the layout: kernels and
+// the host read and write the history through these.
 template <class HistView>
 KOKKOS_INLINE_FUNCTION CohesivePoint load_point(const HistView& ihist, int q, int k) {
   return CohesivePoint{ihist(q, k, 0), ihist(q, k, 1), ihist(q, k, 2), ihist(q, k, 3)};

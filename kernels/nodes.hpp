@@ -197,6 +197,20 @@ void update_nodes_unsampled(const Model<D>& m, const NodeUpdateParams& prm_t,
       });
 }
 
+// A sampled step's works (the host sums `s` of update_nodes) added to the device accumulators
+// `work`, as update_nodes_unsampled adds an unsampled step's: the accumulators stay on the device
+// and the host only reads them.
+inline void add_node_works(const Kokkos::View<double[3]>& work, const NodeSums& s) {
+  auto w = work;
+  const double damping = s.damping, bc = s.bc_work, ramp = s.ramp_work;
+  Kokkos::parallel_for(
+      "fdem::nodes::work [sampled]", Kokkos::RangePolicy<ExecSpace>(0, 1), KOKKOS_LAMBDA(const int) {
+        w(0) += damping;
+        w(1) += bc;
+        w(2) += ramp;
+      });
+}
+
 }  // namespace fdem
 
 namespace Kokkos {

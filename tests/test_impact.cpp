@@ -243,7 +243,7 @@ TEST(Impact, MomentumConservedInFreeFlightOfFragments3D) {
 // energy balance closes within 2 % of the particle's kinetic energy, and the plate holds every
 // surface node, crack faces included: at every sample no surface node is deeper below the plate
 // than its allowance (the depth it had when it became a surface node,
-// Simulation::sync_platen_nodes) plus 0.5 % of the element size. Nodes that are not surface nodes
+// Platens::follow_surfaces) plus 0.5 % of the element size. Nodes that are not surface nodes
 // yet (copies of a vertex that slid along failed interfaces not handed over to contact yet) can
 // be below the plate; every node stays within 10 % of h. Before the contact rules of contact_pair
 // the 2D run (15 m/s, h = 8 mm) blew up at step 481 with 3.4 kJ appearing at a corner where

@@ -4,6 +4,7 @@
 // src/parallel/mpi/comm_mpi.cpp, and fdem's main hands it to run_case (RunOptions::comm) when it
 // runs under mpirun on more than one process. Host only; called between kernels, never inside.
 #include <algorithm>
+#include <cstdlib>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,25 @@ class Comm {
   virtual std::string gpu_aware() const = 0;
   // Ends every process of the run now (after an error on one of them: the others would wait for it).
   [[noreturn]] virtual void abort(int code) const = 0;
+};
+
+// The one process of a run that is not decomposed: the trivial case of a Comm. Its sums and minima
+// leave the values as they are, it has no neighbours to exchange with, and its gather and scatter
+// hand the process its own (ExaMiniMD's serial communicator has this shape).
+class OneProcess final : public Comm {
+ public:
+  int rank() const override { return 0; }
+  int size() const override { return 1; }
+  void sum(double*, int) const override {}
+  void min(double*, int) const override {}
+  void exchange(const std::vector<int>&, const Kokkos::View<double*>&, const std::vector<int>&,
+                const Kokkos::View<double*>&, const std::vector<int>&, int) const override {}
+  void gather(const std::vector<double>& mine, std::vector<double>& all) const override { all = mine; }
+  void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const override {
+    mine = parts.empty() ? std::vector<char>{} : std::move(parts[0]);
+  }
+  std::string gpu_aware() const override { return ""; }
+  [[noreturn]] void abort(int code) const override { std::exit(code); }
 };
 
 // Rows of `width` values of a process's own items (row i at local[i * width], i < own) gathered on

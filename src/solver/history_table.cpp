@@ -23,13 +23,13 @@ HistoryTable<D>::HistoryTable(const Case& c, const HostMesh& mesh, const Simulat
   for (int p = 0; p < np; ++p)
     if (sim.platen_names()[p] == c.stop_platen) stop_platen_ = p;
   add_columns(sim, mesh, part);
-  set_load_window(c, part ? *part : mesh, part ? sim.comm() : nullptr);
+  set_load_window(c, part ? *part : mesh, &sim.parts().comm());
 }
 
 // The load window: the P-wave transit time across the body along the stop platen's normal (the
 // largest extent along any platen's normal without a stop rule), in the slowest material of the
 // case, at most end_time / 10; 32 load samples per window. comm: the extent over every process's
-// nodes (their union is the whole mesh's: the same window on each).
+// nodes (their union is the whole mesh's: the same window on each; one process: its own).
 template <int D>
 void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh, const Comm* comm) {
   double c_min = std::numeric_limits<double>::infinity();
@@ -51,12 +51,10 @@ void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh, const
       lo = std::min(lo, s);
       hi = std::max(hi, s);
     }
-    if (comm) {
-      double v[2] = {lo, -hi};
-      comm->min(v, 2);
-      lo = v[0];
-      hi = -v[1];
-    }
+    double v[2] = {lo, -hi};
+    comm->min(v, 2);
+    lo = v[0];
+    hi = -v[1];
     if (hi > lo) extent = std::max(extent, hi - lo);
   }
   window_ = c.end_time / 10;
@@ -67,11 +65,7 @@ void HistoryTable<D>::set_load_window(const Case& c, const HostMesh& mesh, const
 template <int D>
 void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh, const HostMesh* part) {
   cols_ = {"time [s]", "step"};
-  for (const auto& name : sim.platen_names()) {
-    cols_.push_back(name + "_displacement [m]");
-    for (int k = 0; k < D; ++k) cols_.push_back(name + "_force_" + kAxes[k] + " [N]");
-    cols_.push_back(name + "_load [N]");
-  }
+  sim.platens().add_columns(cols_);
   for (const auto& name : sim.bc_names())
     for (int k = 0; k < D; ++k) cols_.push_back(name + "_reaction_" + kAxes[k] + " [N]");
   for (const auto& name : c_.monitors) {
@@ -86,10 +80,7 @@ void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh
   }
   if (srf_) cols_.push_back("strength_reduction_factor");
   for (int k = 0; k < D; ++k) cols_.push_back(std::string("momentum_") + kAxes[k] + " [N s]");
-  for (const char* e : {"E_kinetic [J]", "E_strain [J]", "E_interface [J]", "E_contact [J]",
-                        "D_fracture [J]", "D_damping [J]", "D_friction [J]", "W_external [J]",
-                        "energy_error [J]", "interfaces_damaged", "interfaces_failed"})
-    cols_.push_back(e);
+  for (const std::string& e : energy_columns()) cols_.push_back(e);  // the ledger's (solver/ledger.hpp)
 }
 
 template <int D>
@@ -106,36 +97,23 @@ void HistoryTable<D>::open(const std::string& out, bool restarted) {
 template <int D>
 std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim) {
   std::vector<double> row = {last_.time, static_cast<double>(last_.step)};
-  const auto forces = sim.platen_forces();  // one copy from the device for all platens
-  for (int p = 0; p < sim.m.platens.count; ++p) {
-    const auto& F = forces[p];
-    const auto& P = sim.m.platens.p[p];
-    const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
-    const double disp = sim.platen_displacement(p, last_.time);
-    row.push_back(disp);
-    for (int k = 0; k < D; ++k) row.push_back(F[k]);
-    row.push_back(load);
-  }
+  sim.platens().append_row(sim.m, sim.platen_forces(), last_.time, row);
   for (const auto& r : sim.reactions())
     for (int k = 0; k < D; ++k) row.push_back(r[k]);
   for (size_t i = 0; i < monitor_nodes_.size(); ++i) {
     double u[3];
     node_list_displacement<D>(sim.m, monitor_nodes_[i], u);
-    if (const Comm* comm = sim.comm()) {  // each process's own nodes of the set: the mean over all
+    if (sim.parts().many()) {  // each process's own nodes of the set: the mean over all
       const double here = static_cast<double>(monitor_nodes_[i].extent(0));
       for (int k = 0; k < 3; ++k) u[k] *= here;
-      comm->sum(u, 3);
+      sim.parts().sum(u, 3);
       for (int k = 0; k < 3; ++k) u[k] /= static_cast<double>(std::max(1L, monitor_count_[i]));
     }
     for (int k = 0; k < D; ++k) row.push_back(u[k]);
   }
   if (srf_) row.push_back(srf_at(last_.time));
   for (int k = 0; k < D; ++k) row.push_back(last_.momentum[k]);
-  for (double e : {last_.kinetic, last_.strain, last_.interface_elastic, last_.contact_elastic,
-                   last_.fracture, last_.damping, last_.friction, last_.work_external,
-                   last_.balance_error, static_cast<double>(last_.damaged),
-                   static_cast<double>(last_.failed)})
-    row.push_back(e);
+  append_energy_row(last_, row);
   return row;
 }
 
@@ -158,7 +136,7 @@ bool HistoryTable<D>::sample_loads(const Simulation<D>& sim, double t0) {
   for (int p = 0; p < sim.m.platens.count; ++p) {
     const auto& F = forces[p];
     const auto& P = sim.m.platens.p[p];
-    const double load = F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
+    const double load = Platens<D>::load(P, F);
     if (load > peak_[p]) {
       peak_[p] = load;
       peak_disp_[p] = sim.platen_displacement(p, t0);
@@ -229,7 +207,7 @@ void HistoryTable<D>::restore(const RunState& s, const std::string& file) {
   peak_ = s.peak_load;
   peak_disp_ = s.peak_displacement;
   max_rel_error_ = s.max_relative_balance_error;
-  last_ = energies_from_vector(s.last_row_energies);
+  last_ = energies_from_vector(s.last_row_energies, "run/last_row_energies");
   // (checkpoints written before the load sampling and the balance warning lack them: the
   // sampling then starts afresh and the warning is taken as given when the error is above it)
   const std::vector<double>& ls = s.load_samples;

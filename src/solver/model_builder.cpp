@@ -211,12 +211,7 @@ void start_frictional_joints(const Case& c, const InterfaceMaterialMap& map, Mod
     const InterfaceMaterial& iq = material(q);
     fr_h(q) = iq.frictional() ? std::tan(iq.phi) : -1.0;
     if (!iq.frictional()) continue;
-    for (int k = 0; k < D; ++k) {  // damage 1 (cohesive_damage): dmax >= dmf > dm0 > 0
-      h_h(q, k, 0) = 2e-300;
-      h_h(q, k, 1) = 1e-300;
-      h_h(q, k, 2) = 2e-300;
-      h_h(q, k, 3) = 0.0;
-    }
+    for (int k = 0; k < D; ++k) store_point(h_h, q, k, failed_point());  // damage 1, nothing dissipated
     ic_h(q) = 1;
   }
   Kokkos::deep_copy(m.ifric, fr_h);
@@ -229,7 +224,7 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
   const int ni = m.ni;
   double step = std::numeric_limits<double>::infinity();
   m.iface = Kokkos::View<int* [2 * D]>("fdem::iface", ni);
-  m.ihist = Kokkos::View<double* [D][4]>("fdem::ihist", ni);
+  m.ihist = Kokkos::View<double* [D][kPointHistory]>("fdem::ihist", ni);
   m.iarea = Kokkos::View<double*>("fdem::iarea", ni);
   m.icontact = Kokkos::View<int*>("fdem::icontact", ni);
   if (ni == 0) return step;
@@ -326,12 +321,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   build_interface_chunks<D>(mesh, m);
   interfaces.stop();
 
-  if (!c.platens.empty()) {
-    build_boundary_areas<D>(mesh, m);
-    sc.platens = build_platens<D>(c, mesh, el.mass, m, platen_names_);
-  }
-  m.platen_acc = Kokkos::View<double* [kPlatenAcc]>("fdem::platen_acc", std::max(1, m.platens.count));
-  platen_acc_host_ = Kokkos::create_mirror_view(m.platen_acc);
+  platens_.build(c, mesh, el.mass, m, sc);
 
   const VelocityBCTable bcs = build_velocity_bcs<D>(c, mesh, m);
   bc_names_ = bcs.names;
@@ -339,7 +329,6 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   reactions_.assign(bc_nodes_.size(), {0, 0, 0});
 
   const std::vector<double> load_ramps = build_point_loads<D>(c, mesh, m);
-  for (int k = 0; k < 3; ++k) gravity_[k] = c.gravity[k];
   set_initial_velocities<D>(c, mesh, bcs, m);
 
   if (contact_wanted(c, mesh)) {
@@ -350,10 +339,12 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     sc.contact = contact_->stable_step();
     // with contact, the platens act on every surface node, crack faces included: their springs
     // count with each node's largest possible area
-    sc.platens_on_surfaces = platen_surface_step<D>(m, contact_->potential_area(), el.mass);
-    sync_platen_nodes();
+    platens_.contact_step(m, contact_->potential_area(), el.mass, sc);
+    platens_.follow_surfaces(m, *contact_, t);
     sc.may_meet = contact_->may_meet();
+    agree_on_meeting();
   }
+  force_pass_contributes_ = parts_.force_pass_contributes(contact_ != nullptr);
 
   sc.dt_cap = c.dt;
   sc.safety = c.safety_factor;

@@ -1,11 +1,11 @@
 #pragma once
 // Building the device model of a run (kernels/model.hpp) from a case and its mesh, one step per
-// module: materials, nodes, element geometry and masses, interfaces and their chunk index,
-// boundary areas and platens, the velocity-BC table, point loads and initial velocities. The
-// Simulation constructor (model_builder.cpp) calls them in this order, then creates the contact
-// system and decides the time step (solver/stable_step.hpp); model_builder_loads.cpp holds the
-// steps from the boundary on. Each step that finds a contribution
-// to the stable step returns it.
+// module: materials, nodes, element geometry and masses, interfaces and their chunk index, the
+// velocity-BC table, point loads and initial velocities (the platens build themselves:
+// solver/platens.hpp). The Simulation constructor (model_builder.cpp) calls them in this order,
+// then creates the contact system and decides the time step (solver/stable_step.hpp);
+// model_builder_loads.cpp holds the steps from the velocity BCs on. Each step that finds a
+// contribution to the stable step returns it.
 #include <cmath>
 #include <string>
 #include <vector>
@@ -59,22 +59,6 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
 // in order of their side-A element; else left empty.
 template <int D>
 void build_interface_chunks(const HostMesh& mesh, Model<D>& m);
-
-// The outer boundary nodes (m.bnode) and their tributary areas (m.barea, per node id).
-template <int D>
-void build_boundary_areas(const HostMesh& mesh, Model<D>& m);
-
-// The platens (after build_boundary_areas) and their springs' storage; their names into `names`.
-// Returns the platen springs' stable step on the boundary nodes.
-template <int D>
-double build_platens(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
-                     std::vector<std::string>& names);
-
-// With contact: the platen springs' stable step on every potential surface node at its largest
-// contact area amax (ContactSystem::potential_area).
-template <int D>
-double platen_surface_step(const Model<D>& m, const std::vector<double>& amax,
-                           const std::vector<double>& mass);
 
 // Velocity BCs: the BC table (one entry per BC, plus merged entries where sets overlap), per node
 // its entry (-1: free), per BC its name and its node list (reactions).

@@ -1,5 +1,5 @@
-// Building the model, continued (solver/model_builder.hpp): the outer boundary and the platens,
-// the velocity-BC table, point loads and initial velocities.
+// Building the model, continued (solver/model_builder.hpp): the velocity-BC table, point loads and
+// initial velocities (the platens' build: solver/platens.cpp).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -21,99 +21,6 @@ auto mirror(const V& v) {
 }
 
 }  // namespace
-
-template <int D>
-void build_boundary_areas(const HostMesh& mesh, Model<D>& m) {
-  const auto faces = boundary_faces(mesh);
-  std::map<int, double> area;
-  const int nf = static_cast<int>(faces.size()) / D;
-  for (int fi = 0; fi < nf; ++fi) {
-    double meas;
-    const double* p0 = &mesh.X[static_cast<size_t>(faces[fi * D]) * D];
-    const double* p1 = &mesh.X[static_cast<size_t>(faces[fi * D + 1]) * D];
-    if constexpr (D == 2) {
-      meas = std::hypot(p1[0] - p0[0], p1[1] - p0[1]) * m.thickness;
-    } else {
-      const double* p2 = &mesh.X[static_cast<size_t>(faces[fi * D + 2]) * D];
-      double a[3], b[3];
-      for (int k = 0; k < 3; ++k) {
-        a[k] = p1[k] - p0[k];
-        b[k] = p2[k] - p0[k];
-      }
-      meas = triangle_area(a, b);
-    }
-    for (int k = 0; k < D; ++k) area[faces[fi * D + k]] += meas / D;
-  }
-  // one part of a decomposed run: the platens act on its own nodes (the ghosts take their owners'
-  // state), whose boundary faces it holds all of (src/parallel/decompose.hpp)
-  if (mesh.owned_nodes >= 0)
-    for (auto it = area.begin(); it != area.end();) it = it->first >= mesh.owned_nodes ? area.erase(it) : ++it;
-  m.nb = static_cast<int>(area.size());
-  m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
-  m.barea = Kokkos::View<double*>("fdem::barea", m.nn);
-  auto bn_h = mirror(m.bnode);
-  auto ba_h = mirror(m.barea);
-  int b = 0;
-  for (const auto& [node, a] : area) {
-    bn_h(b) = node;
-    ba_h(node) = a;
-    ++b;
-  }
-  Kokkos::deep_copy(m.bnode, bn_h);
-  Kokkos::deep_copy(m.barea, ba_h);
-}
-
-template <int D>
-double build_platens(const Case& c, const HostMesh& /*mesh*/, const std::vector<double>& mass, Model<D>& m,
-                     std::vector<std::string>& names) {
-  if (static_cast<int>(c.platens.size()) > kMaxPlatens)
-    throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
-  auto bn_h = mirror(m.bnode);
-  auto ba_h = mirror(m.barea);
-  Kokkos::deep_copy(bn_h, m.bnode);
-  Kokkos::deep_copy(ba_h, m.barea);
-  double step = std::numeric_limits<double>::infinity();
-  m.platens.count = static_cast<int>(c.platens.size());
-  for (int p = 0; p < m.platens.count; ++p) {
-    const auto& ps = c.platens[p];
-    PlatenDev& P = m.platens.p[p];
-    double nlen = 0;
-    for (int k = 0; k < 3; ++k) nlen += ps.normal[k] * ps.normal[k];
-    nlen = std::sqrt(nlen);
-    for (int k = 0; k < 3; ++k) {
-      P.p0[k] = ps.point[k];
-      P.n[k] = ps.normal[k] / nlen;
-      P.vel[k] = ps.velocity[k];
-      P.vel2[k] = ps.has_change ? ps.change_velocity[k] : ps.velocity[k];
-    }
-    P.tc = ps.has_change ? ps.change_time : std::numeric_limits<double>::infinity();
-    P.kn = ps.kn;  // derived values filled by resolve_defaults (io/case.hpp)
-    P.ks = ps.ks;
-    P.mu = ps.friction;
-    P.coh = ps.cohesion;
-    names.push_back(ps.name);
-    for (int bb = 0; bb < m.nb; ++bb) {
-      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) / mass[bn_h(bb)]);
-      step = std::min(step, 2.0 / w);
-    }
-  }
-  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
-  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
-  return step;
-}
-
-template <int D>
-double platen_surface_step(const Model<D>& m, const std::vector<double>& amax,
-                           const std::vector<double>& mass) {
-  double step = std::numeric_limits<double>::infinity();
-  for (int p = 0; p < m.platens.count; ++p) {
-    const PlatenDev& P = m.platens.p[p];
-    for (int i = 0; i < m.nn; ++i)
-      if (amax[i] > 0 && mass[i] > 0)
-        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
-  }
-  return step;
-}
 
 template <int D>
 VelocityBCTable build_velocity_bcs(const Case& c, const HostMesh& mesh, Model<D>& m) {
@@ -236,11 +143,6 @@ void set_initial_velocities(const Case& c, const HostMesh& mesh, const VelocityB
 }
 
 #define FDEM_BUILDERS(D)                                                                                     \
-  template void build_boundary_areas<D>(const HostMesh&, Model<D>&);                                        \
-  template double build_platens<D>(const Case&, const HostMesh&, const std::vector<double>&, Model<D>&,     \
-                                   std::vector<std::string>&);                                              \
-  template double platen_surface_step<D>(const Model<D>&, const std::vector<double>&,                       \
-                                         const std::vector<double>&);                                       \
   template VelocityBCTable build_velocity_bcs<D>(const Case&, const HostMesh&, Model<D>&);                  \
   template std::vector<double> build_point_loads<D>(const Case&, const HostMesh&, Model<D>&);               \
   template void set_initial_velocities<D>(const Case&, const HostMesh&, const VelocityBCTable&, Model<D>&);

@@ -46,24 +46,24 @@ void Simulation<D>::step(bool sample) {
     phase += clock.seconds();
     clock.reset();
   };
-  // (over several processes contact adds its forces in a pass of its own: contact_over_parts)
-  compute_forces<D>(m, scatter_, /*contribute=*/!contact_ || halo_);
+  // (over several processes the force pass contributes, and contact adds its forces in a pass of
+  // its own: Parts::force_pass_contributes)
+  compute_forces<D>(m, scatter_, force_pass_contributes_);
   if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
     m.coh.rescale = 1.0;
     srf_hist_ = srf_;
   }
   lap(phase_times_.forces);
-  apply_platens<D>(m, t, dt);
+  platens_.apply(m, t, dt);
   lap(phase_times_.platens);
   if (contact_) {
-    if (halo_) {
-      contact_over_parts();
-    } else {
-      contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
-      Kokkos::Experimental::contribute(m.f, scatter_);
-    }
-    if (contact_->surface_version() != platen_surface_version_) sync_platen_nodes();
-    if (stable.contact_pending && (halo_ ? contact_meet_ : contact_->may_meet())) apply_contact_step();
+    parts_.open_ghost_forces(m, scatter_);
+    contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
+    Kokkos::Experimental::contribute(m.f, scatter_);
+    parts_.return_ghost_forces(m, phase_times_.exchange);
+    if (contact_->polled()) agree_on_contact();
+    if (platens_.surfaces_changed(*contact_)) platens_.follow_surfaces(m, *contact_, t);
+    if (stable.contact_pending && contact_meet_) apply_contact_step();
     lap(phase_times_.contact);
   }
   if (sample_reactions_) sample_reactions();
@@ -71,7 +71,7 @@ void Simulation<D>::step(bool sample) {
   lap(phase_times_.ledger);
   const NodeSums w = update_nodes_now(sample);
   lap(phase_times_.nodes);
-  if (halo_) exchange_ghosts();
+  parts_.exchange_ghosts(m, phase_times_.exchange);
   book_energies(e, w, sample);
   t += dt;
   ++step_count;
@@ -85,7 +85,7 @@ void Simulation<D>::sample_reactions() {
   for (size_t b = 0; b < bc_nodes_.size(); ++b) {
     double s[3] = {0, 0, 0};
     node_list_force<D>(m, bc_nodes_[b], s);
-    sum_over_processes(s, 3);
+    parts_.sum(s, 3);
     for (int k = 0; k < 3; ++k) reactions_[b][k] = -s[k];
   }
 }
@@ -105,26 +105,19 @@ Energies Simulation<D>::sample_energies(bool sample) {
     e.damaged = static_cast<long>(is.damaged);
     e.failed = static_cast<long>(is.failed);
   }
-  e.contact_elastic = platen_energy<D>(m, t) + (contact_ ? contact_->elastic_energy() : 0.0);
+  e.contact_elastic = platens_.stored_energy(m, t) + (contact_ ? contact_->elastic_energy() : 0.0);
   return e;
 }
 
 template <int D>
 void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
   if (!sample) return;  // this step's works are in work_dev_
-  pull_works();
+  pull_works();  // the works before this step
   {
     // Works done by time t: everything before this step plus the part of this step's increment
     // (centred on x(n): over [t - dt/2, t + dt/2]) up to t.
-    Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
     double wp = 0;
-    for (int p = 0; p < m.platens.count; ++p) {
-      double inc = 0;
-      for (int k = 0; k < 3; ++k)
-        inc += platen_acc_host_(p, kPlatenForce + k) * m.platens.p[p].mean_velocity(k, t, 0.5 * dt) * dt;
-      wp += platen_acc_host_(p, kPlatenWork) - 0.5 * inc;
-      e.friction += platen_acc_host_(p, kPlatenFriction);
-    }
+    platens_.book(m, t, dt, step_count + 1, wp, e.friction);
     if (contact_) e.friction += contact_->dissipated();
     e.kinetic = w.kinetic;
     for (int k = 0; k < 3; ++k) e.momentum[k] = w.momentum[k];
@@ -133,32 +126,19 @@ void Simulation<D>::book_energies(Energies& e, const NodeSums& w, bool sample) {
     // ramped point loads: each step's work spans [t, t + dt] (kernels/nodes.hpp), so the work by
     // time t is that of the steps before
     if (prm_.load_ramps > 0) e.work_external += work_ramp_;
-    if (comm_) {  // every part's own share, summed: the whole run's
-      double v[] = {e.kinetic, e.strain, e.interface_elastic, e.contact_elastic, e.fracture, e.damping,
-                    e.friction, e.work_external, e.momentum[0], e.momentum[1], e.momentum[2],
-                    static_cast<double>(e.damaged), static_cast<double>(e.failed)};
-      comm_->sum(v, 13);
-      double* f[] = {&e.kinetic, &e.strain, &e.interface_elastic, &e.contact_elastic, &e.fracture, &e.damping,
-                     &e.friction, &e.work_external, &e.momentum[0], &e.momentum[1], &e.momentum[2]};
-      for (int i = 0; i < 11; ++i) *f[i] = v[i];
-      e.damaged = static_cast<long>(v[11]);
-      e.failed = static_cast<long>(v[12]);
-    }
-    const double now = e.kinetic + e.strain + e.interface_elastic + e.contact_elastic +
-                       e.fracture + e.damping + e.friction;
+    // every part's own share, summed: the whole run's (the ledger's table, solver/ledger.hpp)
+    sum_energies(e, [this](double* v, int n) { parts_.sum(v, n); });
+    sample_added_terms(e);
+    const double now = energy_now(e), work = energy_work(e);
     if (!have_reference_) {
-      reference_ = now - e.work_external;
+      reference_ = now - work;
       have_reference_ = true;
     }
-    e.balance_error = now - e.work_external - reference_;
-    e.scale = std::max({std::fabs(now), std::fabs(reference_) + std::fabs(e.work_external),
-                        energy_floor_, 1e-300});
+    e.balance_error = now - work - reference_;
+    e.scale = std::max({std::fabs(now), std::fabs(reference_) + std::fabs(work), energy_floor_, 1e-300});
     energies_ = e;
   }
-  work_damping_ += w.damping;
-  work_bc_ += w.bc_work;
-  work_ramp_ += w.ramp_work;
-  push_works();
+  add_node_works(work_dev_, w);  // (the host copies stay those before this step: read, not written)
 }
 
 template <int D>
@@ -203,16 +183,6 @@ void Simulation<D>::apply_contact_step() {
   dt_changed_at_ = step_count;
   take_contact_step();
   dtv_next_ = 0.5 * (dt_before_change_ + dt);
-}
-
-template <int D>
-void Simulation<D>::sync_platen_nodes() {
-  platen_surface_version_ = contact_->surface_version();
-  if (m.platens.count == 0) return;
-  const int ns = contact_->own_surface_nodes();  // (a part: the platens act on its own nodes)
-  m.bnode = contact_->surface_node_list();      // its first ns entries
-  m.nb = ns;
-  grow_platen_areas<D>(m, contact_->surface().narea, ns, t);
 }
 
 namespace {
@@ -264,7 +234,7 @@ long Simulation<D>::check_inverted(std::string* where) {
   const InvertedElements inv = inverted_elements<D>(m);
   const int local = inv.count, first = inv.first;
   double all = local;  // over the processes (each counts its own elements)
-  sum_over_processes(&all, 1);
+  parts_.sum(&all, 1);
   const long count = static_cast<long>(all);
   if (count > 0 && where && local == 0) {
     *where = std::to_string(count) + " element(s) turned inside out at step " + std::to_string(step_count) +
@@ -324,34 +294,6 @@ void Simulation<D>::check_stability() {
 }
 
 template <int D>
-std::array<double, 3> Simulation<D>::platen_force(int p) const {
-  return platen_forces()[p];
-}
-
-template <int D>
-std::vector<std::array<double, 3>> Simulation<D>::platen_forces() const {
-  Kokkos::deep_copy(platen_acc_host_, m.platen_acc);
-  std::vector<std::array<double, 3>> out(m.platens.count);
-  for (int p = 0; p < m.platens.count; ++p)
-    for (int k = 0; k < 3; ++k) out[p][k] = platen_acc_host_(p, kPlatenForce + k);
-  if (comm_ && !out.empty()) {  // the parts' own boundary nodes: summed, the whole body's
-    std::vector<double> flat;
-    for (const auto& f : out) flat.insert(flat.end(), f.begin(), f.end());
-    comm_->sum(flat.data(), static_cast<int>(flat.size()));
-    for (size_t i = 0; i < flat.size(); ++i) out[i / 3][i % 3] = flat[i];
-  }
-  return out;
-}
-
-template <int D>
-double Simulation<D>::platen_displacement(int p, double at) const {
-  const auto& P = m.platens.p[p];
-  double s2 = 0;
-  for (int k = 0; k < 3; ++k) s2 += P.shift(k, at) * P.shift(k, at);
-  return std::sqrt(s2);
-}
-
-template <int D>
 void Simulation<D>::download(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                              std::vector<double>& stress, std::vector<double>& damage, bool gather) {
   auto x_h = Kokkos::create_mirror_view(m.x);
@@ -381,31 +323,7 @@ void Simulation<D>::download(std::vector<double>& x, std::vector<double>& u, std
   auto d_h = Kokkos::create_mirror_view(d);
   Kokkos::deep_copy(d_h, d);
   damage.assign(d_h.data(), d_h.data() + m.ni);
-  if (comm_ && gather) gather_whole(x, u, v, stress, damage);
-}
-
-std::vector<double> energies_to_vector(const Energies& e) {
-  return {e.time, static_cast<double>(e.step), e.kinetic, e.strain, e.interface_elastic,
-          e.contact_elastic, e.fracture, e.damping, e.friction, e.work_external, e.balance_error,
-          e.scale, static_cast<double>(e.damaged), static_cast<double>(e.failed)};
-}
-Energies energies_from_vector(const std::vector<double>& v) {
-  Energies e;
-  e.time = v[0];
-  e.step = static_cast<long>(v[1]);
-  e.kinetic = v[2];
-  e.strain = v[3];
-  e.interface_elastic = v[4];
-  e.contact_elastic = v[5];
-  e.fracture = v[6];
-  e.damping = v[7];
-  e.friction = v[8];
-  e.work_external = v[9];
-  e.balance_error = v[10];
-  e.scale = v[11];
-  e.damaged = static_cast<long>(v[12]);
-  e.failed = static_cast<long>(v[13]);
-  return e;
+  if (gather) gather_whole(x, u, v, stress, damage);
 }
 
 template <int D>
@@ -423,8 +341,9 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
     f.real("simulation/work_ramped_loads", work_ramp_, /*optional=*/true);
   f.real("simulation/energy_reference", reference_);
   f.integer("simulation/have_reference", have_reference_);
-  f.values("simulation/energies", kEnergyFieldCount, [&] { return energies_to_vector(energies_); },
-           [&](const std::vector<double>& a) { energies_ = energies_from_vector(a); });
+  // (the ledger's layout, solver/ledger.hpp: older checkpoints hold its first kEnergyFieldCount values)
+  f.values("simulation/energies", -1, [&] { return energies_to_vector(energies_); },
+           [&](const std::vector<double>& a) { energies_ = energies_from_vector(a, "simulation/energies"); });
   f.values("simulation/damping", 2, [&] { return std::array<double, 2>{prm_.alpha, prm_.cmass}; },
            [&](const std::vector<double>& a) {
              prm_.alpha = a[0];
@@ -448,10 +367,7 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
   f.view("model/ihist", m.ihist);
   f.view("model/icontact", m.icontact);
   f.view("model/icontact_pending", m.icontact_pending, m.icontact_pending.data() != nullptr);
-  f.view("model/platen_fs", m.platen_fs);
-  f.view("model/platen_g0", m.platen_g0);
-  f.view("model/platen_area", m.barea, m.barea.extent(0) > 0);
-  f.view("model/platen_acc", m.platen_acc);
+  platens_.checkpoint_fields(f, m);
 }
 
 template <int D>
@@ -459,7 +375,7 @@ void Simulation<D>::save_state(StateArrays& s) const {
   pull_works();
   StateSaver saver(s);
   const_cast<Simulation*>(this)->checkpoint_fields(saver);  // the saver only reads
-  if (contact_) contact_->save_state(s, node_global_);  // (node_global_: empty on one process)
+  if (contact_) contact_->save_state(s, parts_.node_global());  // (empty on one process)
 }
 
 template <int D>
@@ -486,8 +402,9 @@ void Simulation<D>::load_state(const StateArrays& s) {
   checkpoint_fields(loader);
   push_works();
   if (contact_) {
-    contact_->load_state(s, m, node_global_);
-    sync_platen_nodes();
+    contact_->load_state(s, m, parts_.node_global());
+    platens_.follow_surfaces(m, *contact_, t);
+    agree_on_meeting();
     contact_->law.mu = mu0_ / srf_;
     contact_->law.srf = srf_;
   }

@@ -19,28 +19,13 @@
 #include "mesh/mesh.hpp"
 #include "parallel/comm.hpp"
 #include "parallel/decompose.hpp"
+#include "parallel/parts.hpp"
 #include "solver/contact_system.hpp"
+#include "solver/ledger.hpp"
+#include "solver/platens.hpp"
 #include "solver/stable_step.hpp"
 
 namespace fdem {
-
-// Energies and balance at one instant (J). balance_error = (E_now - E_initial) - W_ext.
-struct Energies {
-  double time = 0;           // the instant they describe (start of the sampled step)
-  long step = 0;
-  double kinetic = 0, strain = 0, interface_elastic = 0, contact_elastic = 0;
-  double fracture = 0, damping = 0, friction = 0;
-  double work_external = 0;  // platens + velocity BCs + gravity + point loads
-  double balance_error = 0;
-  double scale = 0;          // magnitude the error is judged against
-  long damaged = 0, failed = 0;
-  double momentum[3] = {0, 0, 0};  // total linear momentum sum m v at `time` (N s)
-};
-
-// Energies as a flat array (checkpoints): kEnergyFieldCount values.
-constexpr int kEnergyFieldCount = 14;
-std::vector<double> energies_to_vector(const Energies& e);
-Energies energies_from_vector(const std::vector<double>& v);
 
 // Wall time of each phase of step(), summed over the timed steps so far (s): the sampled ones (an
 // unsampled step waits for no clock). The kernels of a phase are fenced before its clock stops, so
@@ -56,7 +41,6 @@ struct PhaseTimes {
   double exchange = 0;
   long steps = 0;  // all steps
   long timed = 0;  // the timed ones
-  double total() const { return forces + platens + contact + ledger + nodes + exchange; }
 };
 
 template <int D>
@@ -100,12 +84,13 @@ class Simulation {
   // and every sum the run reports (energies, momentum, counts, platen forces, reactions, inverted
   // elements) is over all processes, the same on each.
   void set_decomposition(std::shared_ptr<const Comm> comm, const SubMesh& part);
-  const Comm* comm() const { return comm_.get(); }
+  // The decomposition (src/parallel/parts.hpp): on one process the trivial one.
+  const Parts<D>& parts() const { return parts_; }
   // Over several processes: the whole mesh's index of each local interface (the counted ones,
   // first owned_ifaces() of m, then the others).
-  const std::vector<int>& ifaces_global() const { return iface_global_; }
+  const std::vector<int>& ifaces_global() const { return parts_.iface_global(); }
   // Bytes of ghost positions this process sends per step (0 on one process).
-  long exchange_bytes() const { return halo_ ? halo_->send_bytes() : 0; }
+  long exchange_bytes() const { return parts_.exchange_bytes(); }
   // Work skipped because the scene does not need it (the results are the same either way; the
   // switches exist for the tests and benchmarks that show it): no damping force or damping work
   // while both damping coefficients are zero.
@@ -126,12 +111,14 @@ class Simulation {
   // check_finite, then the energy balance: energy appearing from nowhere (more than half the
   // energy scale) means the integration is unstable. Throws NumericalError with step, time and dt.
   void check_stability();
+  // The rigid platens (solver/platens.hpp).
+  const Platens<D>& platens() const { return platens_; }
   // Platen force on the body (3 components) of the last step, and its displacement along its
   // velocity direction at time `at`.
-  std::array<double, 3> platen_force(int p) const;
-  // The same for every platen, with one copy from the device.
-  std::vector<std::array<double, 3>> platen_forces() const;
-  double platen_displacement(int p, double at) const;
+  std::array<double, 3> platen_force(int p) const { return platen_forces()[p]; }
+  // The same for every platen, with one copy from the device (none when the ledger took it).
+  std::vector<std::array<double, 3>> platen_forces() const { return platens_.forces(m, parts_, step_count); }
+  double platen_displacement(int p, double at) const { return Platens<D>::displacement(m.platens.p[p], at); }
   // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
   // forces of the last step (call before step() clears them: use sample_reactions()).
   const std::vector<std::array<double, 3>>& reactions() const { return reactions_; }
@@ -151,7 +138,8 @@ class Simulation {
     long nn, ne, ni;
   };
   WholeRows whole_rows() const {
-    return {node_global_, elem_global_, iface_global_, whole_nn_, whole_ne_, whole_ni_};
+    return {parts_.node_global(), parts_.elem_global(), parts_.iface_global(),
+            parts_.whole_nodes(), parts_.whole_elems(), parts_.whole_ifaces()};
   }
 
   // Contact between bodies and fragments (null when the case has it off; see solver/contact_system.hpp).
@@ -193,30 +181,26 @@ class Simulation {
   void save_state_whole(StateArrays& whole, std::vector<RowPart>* rows = nullptr) const;
   void load_state_whole(const StateArrays& whole);
 
-  const std::vector<std::string>& platen_names() const { return platen_names_; }
+  const std::vector<std::string>& platen_names() const { return platens_.names(); }
   const std::vector<std::string>& bc_names() const { return bc_names_; }
 
  private:
   ForceScatter<D> scatter_;
-  std::shared_ptr<const Comm> comm_;  // null: one process
-  std::unique_ptr<Halo<D>> halo_;
-  // over several processes: the whole mesh's index of each local node, element and interface
-  // (the own ones first: m.owned_*()), and the whole mesh's counts
-  std::vector<int> node_global_, elem_global_, iface_global_;
-  long whole_nn_ = 0, whole_ne_ = 0, whole_ni_ = 0;
+  Parts<D> parts_;  // one process: the trivial decomposition
+  bool force_pass_contributes_ = true;  // Parts::force_pass_contributes
   void gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                     std::vector<double>& stress, std::vector<double>& damage);
-  void exchange_ghosts();
 
  public:  // (nvcc: a function that holds a device lambda must be public)
   // Contact over several processes (docs/parallel.md "Contact"): each process computes the contacts
   // of its own surface nodes against every face it holds (its contact zone); the forces they put on
-  // ghost nodes go back to the owners. contact_meet_: whether surfaces can meet on any process
-  // (agreed on the steps the contact systems poll for failed interfaces, with the check that no
-  // node has moved so far that the zones no longer hold every face a contact may need). Called by
-  // step() and on the poll steps only.
-  void contact_over_parts();
+  // ghost nodes go back to the owners (Parts::return_ghost_forces). contact_meet_: whether surfaces
+  // can meet on any process, agreed by agree_on_contact on the steps the contact systems poll for
+  // failed interfaces, with the check that no node has moved so far that the zones no longer hold
+  // every face a contact may need. Called by step() on the poll steps of a run over processes.
   void agree_on_contact();
+  // contact_meet_ from every process's contact system (collective; one process: its own).
+  void agree_on_meeting();
   // Over several processes with contact: the nodes have moved so far from where the parts were cut
   // that the contact zones may soon miss a face; the run loop then cuts the parts anew at the
   // current positions (solver/run.cpp), set on the same step on every process.
@@ -280,16 +264,12 @@ class Simulation {
   // anew every N steps (at the next zone check), each time with the parts' ids rotated, so that
   // every element, node and history moves to another process (solver/run.cpp).
   long test_recut_every_ = 0, next_test_cut_ = -1;
-  // Sums over the processes in place (nothing on one process).
-  void sum_over_processes(double* v, int n) const {
-    if (comm_) comm_->sum(v, n);
-  }
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   double mu0_ = 0;         // contact friction coefficient as given
   double srf_ = 1;         // strength reduction factor now
   double srf_hist_ = 1;    // the factor the interface histories were last updated under
   std::unique_ptr<ContactSystem<D>> contact_;
-  long platen_surface_version_ = -1;  // contact surfaces the platen node list was taken from
+  Platens<D> platens_;
   bool warned_inverted_ = false;
   NodeUpdateParams prm_{};
   double dtv_next_ = 0;  // velocity step of the next node update when dt has just changed
@@ -298,9 +278,6 @@ class Simulation {
   StepContributions step_sources_;  // what the stable step is decided from (solver/stable_step.hpp)
   void take_contact_step();   // dt and the stable-step estimates become those with contact
   void apply_contact_step();  // the same during a run (the velocity step of the change)
-  // With contact: the platens act on the contact system's surface nodes with their areas (called
-  // when the surfaces change).
-  void sync_platen_nodes();
   // The ledger of step(): reactions of the velocity BCs from this step's forces; the energies
   // stored at time t (sample: else only time and step); after the node update, the works and the
   // balance (sample) and the work accumulators.
@@ -311,10 +288,10 @@ class Simulation {
   // (StateSaver) and load_state (StateLoader) (solver/state_fields.hpp).
   template <class Fields>
   void checkpoint_fields(Fields& f);
-  double gravity_[3] = {0, 0, 0};
   // Works of damping, velocity BCs and ramped point loads so far: on the device (work_dev_:
-  // 0 damping, 1 BCs, 2 ramped loads, summed there on unsampled steps), on the host on sampled
-  // steps (pull_works, then push_works).
+  // 0 damping, 1 BCs, 2 ramped loads, summed there on every step: kernels/nodes.hpp); the host
+  // copies are read on sampled steps and for a checkpoint (pull_works), and written only by a
+  // restart (push_works).
   mutable double work_damping_ = 0, work_bc_ = 0, work_ramp_ = 0;
   Kokkos::View<double[3]> work_dev_{"fdem::work"};
   Kokkos::View<NodeSums> node_sums_{"fdem::node_sums"};
@@ -325,11 +302,10 @@ class Simulation {
   double energy_floor_ = 0;  // energies below this are round-off (strain energy at strain 1e-6)
   Energies energies_;
   PhaseTimes phase_times_;
-  std::vector<std::string> platen_names_, bc_names_;
+  std::vector<std::string> bc_names_;
   std::vector<Kokkos::View<int*>> bc_nodes_;
   std::vector<std::array<double, 3>> reactions_;
   bool sample_reactions_ = false;
-  mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenAcc]>())) platen_acc_host_;
 };
 
 extern template class Simulation<2>;

@@ -26,8 +26,8 @@ std::vector<double> Simulation<D>::node_work_whole() const {
   Kokkos::View<double*> w("fdem::parts::node_work", m.nn);
   if (contact_) contact_->own_point_work(w, work_model_.contact_unit);
   auto h = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), w);
-  return gather_rows(*comm_, h.data(), static_cast<size_t>(m.owned_nodes()), 1, node_global_,
-                     static_cast<size_t>(whole_nn_));
+  return gather_rows(parts_.comm(), h.data(), static_cast<size_t>(m.owned_nodes()), 1, parts_.node_global(),
+                     static_cast<size_t>(parts_.whole_nodes()));
 }
 
 template double Simulation<2>::modelled_work(const Kokkos::View<double*>&) const;

@@ -25,9 +25,9 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
     throw InputError("set_decomposition: contact over processes needs a part decomposed with a contact reach "
                      "beyond the search distance (" + std::to_string(contact_->radius) + " m; got " +
                      std::to_string(part.contact_reach) + " m)");
-  comm_ = std::move(comm);
   // with contact the ghosts' velocities travel too (a contact's friction reads the face's)
-  halo_ = std::make_unique<Halo<D>>(part.neighbours, part.send, part.recv, /*velocities=*/contact_ != nullptr);
+  parts_.decompose(std::move(comm), part, /*velocities=*/contact_ != nullptr);
+  force_pass_contributes_ = parts_.force_pass_contributes(contact_ != nullptr);
   zone_reach_ = part.contact_reach;
   if (const char* every = std::getenv("FDEM_TEST_RECUT")) test_recut_every_ = std::atol(every);
   if (contact_) {  // where the zones were taken: the reference positions, or those of a cut during the run
@@ -41,27 +41,16 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
       for (int k = 0; k < D; ++k) h(i, k) = part.cut_x.empty() ? X(i, k) : part.cut_x[static_cast<size_t>(i) * D + k];
     Kokkos::deep_copy(xcut_, h);
   }
-  node_global_ = part.node_global;
-  elem_global_ = part.elem_global;
-  iface_global_ = part.iface_global;
-  whole_nn_ = part.whole_nodes;
-  whole_ne_ = part.whole_elems;
-  whole_ni_ = part.whole_ifaces;
   // the time step: the smallest contributions over the processes, decided as one run would
-  StepContributions& sc = step_sources_;
-  double v[5] = {sc.bulk, sc.interfaces, sc.platens, sc.contact, sc.platens_on_surfaces};
-  comm_->min(v, 5);
-  StepContributions all = sc;
-  all.bulk = v[0];
-  all.interfaces = v[1];
-  all.platens = v[2];
-  all.contact = v[3];
-  all.platens_on_surfaces = v[4];
+  StepContributions all = step_sources_;
+  double v[kSmallestOverPartsCount];
+  for (int i = 0; i < kSmallestOverPartsCount; ++i) v[i] = all.*kSmallestOverParts[i];
+  parts_.min(v, kSmallestOverPartsCount);
+  for (int i = 0; i < kSmallestOverPartsCount; ++i) all.*kSmallestOverParts[i] = v[i];
   all.bulk_element = -1;
   if (contact_) {  // surfaces may meet on some process: on all (one time step)
-    double meet = contact_->may_meet() ? -1.0 : 0.0;
-    comm_->min(&meet, 1);
-    all.may_meet = contact_meet_ = meet < 0;
+    agree_on_meeting();
+    all.may_meet = contact_meet_;
   }
   agree_time_step(all);
   // the energy floor from the whole body's volume (each element once)
@@ -70,49 +59,28 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   double own[2] = {0, 0};
   for (int e = 0; e < m.ne; ++e) own[e < m.owned_elems() ? 0 : 1] += vol(e);
   double whole = own[0];
-  comm_->sum(&whole, 1);
+  parts_.sum(&whole, 1);
   if (own[0] + own[1] > 0) energy_floor_ *= whole / (own[0] + own[1]);
-  exchange_ghosts();
+  parts_.exchange_ghosts(m, phase_times_.exchange);
 }
 
 template <int D>
-void Simulation<D>::exchange_ghosts() {
-  Kokkos::Timer clock;
-  halo_->pack(m);
-  fence("fdem::halo: packed");  // MPI reads the buffer
-  comm_->exchange(halo_->neighbours, halo_->send_buf, halo_->send_off, halo_->recv_buf, halo_->recv_off,
-                  halo_->per);
-  halo_->unpack(m);  // runs before the next force pass on the same execution space: no fence
-  phase_times_.exchange += clock.seconds();  // pack, MPI and the unpack's launch
-}
-
-// The contact pass of a step over several processes, after the force pass has contributed its
-// forces to m.f: the ghosts' forces zeroed, the contacts of the own surface nodes added through the
-// scatter view, then the forces on the ghosts sent to their owners, which add them (in the order
-// of their neighbours). Every contact is computed once, by its node's owner.
-template <int D>
-void Simulation<D>::contact_over_parts() {
-  zero_ghost_forces(m);
-  scatter_.reset();
-  contact_->update(m, dt, scatter_);
-  Kokkos::Experimental::contribute(m.f, scatter_);
-  Kokkos::Timer clock;
-  halo_->pack_forces(m);
-  fence("fdem::halo: ghost forces packed");  // MPI reads the buffer
-  comm_->exchange(halo_->neighbours, halo_->recv_buf, halo_->recv_off, halo_->send_buf, halo_->send_off, D);
-  halo_->add_forces(m);
-  phase_times_.exchange += clock.seconds();
-  if (contact_->polled()) agree_on_contact();
+void Simulation<D>::agree_on_meeting() {
+  double meet = contact_->may_meet() ? -1.0 : 0.0;
+  parts_.min(&meet, 1);
+  contact_meet_ = meet < 0;
 }
 
 // On the steps the contact systems poll for failed interfaces (the same on every process): whether
 // surfaces may meet anywhere (the contact time step then applies on all), and the contact zones'
 // check. A process holds every element that came within zone_reach_ of its own nodes where the
 // parts were cut; a face it does not hold stays beyond the search distance while
-// 2 (d + 25 v dt) < zone_reach_ - search distance, with d the largest displacement since the cut
-// and v the largest speed of any node (25 steps: to the next check). When that fails the parts
-// are cut anew at the current positions (recut_due_; d is 0 after it), unless the speed alone
-// (2 * 25 v dt) fills the zone: then no cut helps and the run stops, naming contact.zone.
+// 2 (d + N v dt) < zone_reach_ - search distance, with d the largest displacement since the cut,
+// v the largest speed of any node and N = kContactPollEvery (solver/contact_system.hpp: the steps
+// to the next check). When that fails the parts are cut anew at the current positions
+// (recut_due_; d is 0 after it), unless the speed alone (2 N v dt) fills the zone: then no cut
+// helps and the run stops, naming contact.zone. On one process there is nothing to agree on and
+// no zone: surfaces may meet when this process's contact system says so.
 //
 // The same steps check the balance (Balance): each process's modelled work of a step, its largest
 // and its mean over the processes; when the largest exceeds the mean by more than
@@ -121,18 +89,22 @@ void Simulation<D>::contact_over_parts() {
 // work (recut_reason_ "work"; solver/run.cpp).
 template <int D>
 void Simulation<D>::agree_on_contact() {
+  if (!parts_.many()) {  // one process: nothing to agree on, no zones or balance to check
+    contact_meet_ = contact_->may_meet();
+    return;
+  }
   double d2 = 0, v2 = 0;
   largest_drift(m, xcut_, d2, v2);
   double work = modelled_work();
   double w[4] = {contact_->may_meet() ? -1.0 : 0.0, -std::sqrt(d2), -std::sqrt(v2), -work};
-  comm_->min(w, 4);  // the largest over the processes
-  comm_->sum(&work, 1);
+  parts_.min(w, 4);  // the largest over the processes
+  parts_.sum(&work, 1);
   contact_meet_ = w[0] < 0;
   const double d = -w[1], speed = -w[2], room = zone_reach_ - contact_->radius;
-  const double ahead = 2.0 * 25.0 * speed * dt, need = 2.0 * d + ahead;
+  const double ahead = 2.0 * double(kContactPollEvery) * speed * dt, need = 2.0 * d + ahead;
   Balance& b = balance_;
   b.work_most = -w[3];
-  b.work_mean = work / comm_->size();
+  b.work_mean = work / parts_.size();
   b.excess = b.work_mean > 0 ? b.work_most / b.work_mean - 1.0 : 0.0;
   b.largest = std::max(b.largest, b.excess);
   if (b.after_cut < 0) b.after_cut = b.excess;
@@ -153,10 +125,10 @@ void Simulation<D>::agree_on_contact() {
   char msg[640];
   std::snprintf(msg, sizeof msg,
                 "contact over %d processes: at step %ld (t = %.4g s) nodes move at up to %.3g m/s, so far within "
-                "the 25 steps between two checks of the contact zones that each process's zone (contact.zone = "
+                "the %d steps between two checks of the contact zones that each process's zone (contact.zone = "
                 "%.3g m beyond the search distance) may miss a face its contacts can touch even right after the "
                 "parts are cut anew: give a larger contact.zone (docs/parallel.md) or run on one process",
-                comm_->size(), step_count, t, speed, room);
+                parts_.size(), step_count, t, speed, kContactPollEvery, room);
   throw InputError(msg);
 }
 
@@ -164,17 +136,19 @@ void Simulation<D>::agree_on_contact() {
 template <int D>
 void Simulation<D>::gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                                  std::vector<double>& stress, std::vector<double>& damage) {
+  if (!parts_.many()) return;  // one process: its rows are the whole mesh's, in order
+  const Comm& comm = parts_.comm();
   const size_t nn = static_cast<size_t>(m.owned_nodes()), ne = static_cast<size_t>(m.owned_elems()),
                ni = static_cast<size_t>(m.owned_ifaces());
-  for (auto* a : {&x, &u, &v}) *a = gather_rows(*comm_, a->data(), nn, D, node_global_, whole_nn_);
-  stress = gather_rows(*comm_, stress.data(), ne, 6, elem_global_, whole_ne_);
-  damage = gather_rows(*comm_, damage.data(), ni, 1, iface_global_, whole_ni_);
+  const WholeRows w = whole_rows();
+  for (auto* a : {&x, &u, &v}) *a = gather_rows(comm, a->data(), nn, D, w.nodes, w.nn);
+  stress = gather_rows(comm, stress.data(), ne, 6, w.elems, w.ne);
+  damage = gather_rows(comm, damage.data(), ni, 1, w.ifaces, w.ni);
 }
 
 #define FDEM_SIMULATION_PARALLEL(D)                                                            \
   template void Simulation<D>::set_decomposition(std::shared_ptr<const Comm>, const SubMesh&); \
-  template void Simulation<D>::exchange_ghosts();                                              \
-  template void Simulation<D>::contact_over_parts();                                           \
+  template void Simulation<D>::agree_on_meeting();                                             \
   template void Simulation<D>::agree_on_contact();                                             \
   template void Simulation<D>::gather_whole(std::vector<double>&, std::vector<double>&,        \
                                             std::vector<double>&, std::vector<double>&,        \

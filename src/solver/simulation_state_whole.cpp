@@ -32,7 +32,7 @@ std::vector<ItemEntry> item_entries(int platens) {
   return {{"model/x", true, 1, D},           {"model/v", true, 1, D},
           {"model/f", true, 1, D},           {"model/platen_area", true, 1, 1},
           {"model/platen_fs", true, platens, D}, {"model/platen_g0", true, platens, 1},
-          {"model/ihist", false, 1, 4 * D},  {"model/icontact", false, 1, 1}};
+          {"model/ihist", false, 1, kPointHistory * D},  {"model/icontact", false, 1, 1}};
 }
 
 // Accumulators of what each process's own items did (their sum is the whole run's).
@@ -64,12 +64,12 @@ template <int D>
 void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* rows) const {
   StateArrays local;
   save_state(local);
-  const bool root = comm_->rank() == 0;
+  const bool root = parts_.comm().rank() == 0;
   whole = StateArrays{};
   if (root) whole = local;  // the entries every process holds alike; the others replaced below
   for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
     double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
-    comm_->min(&absent, 1);
+    parts_.comm().min(&absent, 1);
     if (absent > 0) continue;
     const bool integer = local.i64.count(e.name) > 0;
     const std::vector<double> v = entry_values(local, e.name);
@@ -83,10 +83,10 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
       RowPart r;
       r.name = e.name;
       r.integer = integer;
-      r.whole_rows = e.nodes ? whole_nn_ : whole_ni_;
+      r.whole_rows = e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces();
       r.blocks = e.blocks;
       r.width = e.width;
-      r.ids = e.nodes ? &node_global_ : &iface_global_;
+      r.ids = e.nodes ? &parts_.node_global() : &parts_.iface_global();
       r.own = own;
       for (size_t b = 0; b < blocks; ++b)
         r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
@@ -97,9 +97,9 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
     }
     std::vector<double> out;
     for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
-      const std::vector<double> rows = gather_rows(*comm_, v.data() + b * n * w, own, w,
-                                                   e.nodes ? node_global_ : iface_global_,
-                                                   static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_));
+      const std::vector<double> rows = gather_rows(parts_.comm(), v.data() + b * n * w, own, w,
+                                                   e.nodes ? parts_.node_global() : parts_.iface_global(),
+                                                   static_cast<size_t>(e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces()));
       out.insert(out.end(), rows.begin(), rows.end());
     }
     if (!root) continue;
@@ -111,14 +111,14 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
     if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
     const std::vector<double>& v = local.f64.at(name);
     std::vector<double> all;
-    comm_->gather(v, all);
+    parts_.comm().gather(v, all);
     if (!root || v.empty()) continue;
     std::vector<double> total(v.size(), 0.0);
     for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
     whole.f64[name] = total;
     whole.f64[kProcessesPrefix + name] = all;
   }
-  if (root) whole.put_int(kProcessesPrefix + "count", comm_->size());
+  if (root) whole.put_int(kProcessesPrefix + "count", parts_.comm().size());
   if (contact_) {
     save_contact_whole(local, whole);
     // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
@@ -129,14 +129,14 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
     if (rows) {
       RowPart r;
       r.name = kProcessesPrefix + "cut_x";
-      r.whole_rows = whole_nn_;
+      r.whole_rows = parts_.whole_nodes();
       r.width = D;
-      r.ids = &node_global_;
+      r.ids = &parts_.node_global();
       r.own = xc.extent(0);
       r.values = std::move(own);
       rows->push_back(std::move(r));
     } else {
-      std::vector<double> cut = gather_rows(*comm_, own.data(), xc.extent(0), D, node_global_, whole_nn_);
+      std::vector<double> cut = gather_rows(parts_.comm(), own.data(), xc.extent(0), D, parts_.node_global(), parts_.whole_nodes());
       if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
     }
   }
@@ -149,7 +149,7 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
 // summed, whether surfaces may meet on any process, and the poll counter (the same on all).
 template <int D>
 void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& whole) const {
-  const bool root = comm_->rank() == 0;
+  const bool root = parts_.comm().rank() == 0;
   std::vector<std::pair<std::string, bool>> names;  // (the same on every process: the same code wrote them)
   for (const auto& e : local.f64)
     if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, false);
@@ -158,8 +158,8 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
   for (const auto& [name, integer] : names) {
     const std::vector<double> v = entry_values(local, name);
     std::vector<double> all, sizes;
-    comm_->gather(v, all);
-    comm_->gather({static_cast<double>(v.size())}, sizes);
+    parts_.comm().gather(v, all);
+    parts_.comm().gather({static_cast<double>(v.size())}, sizes);
     if (!root) continue;
     whole.f64.erase(name);
     whole.i64.erase(name);
@@ -167,7 +167,7 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
     whole.f64[kProcessesPrefix + "sizes/" + name] = sizes;
   }
   std::vector<double> cut;
-  comm_->gather(decomposition_print(), cut);
+  parts_.comm().gather(decomposition_print(), cut);
   if (!root) return;
   whole.f64[kProcessesPrefix + "contact_parts"] = cut;
   auto per = [&whole](const char* name) { return entry_values(whole, kProcessesPrefix + name); };
@@ -189,7 +189,7 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
 // ids): a restart takes its own contact lists back only when its part is the same.
 template <int D>
 std::vector<double> Simulation<D>::decomposition_print() const {
-  const uint64_t h = fnv1a(node_global_.data(), node_global_.size() * sizeof(int));
+  const uint64_t h = fnv1a(parts_.node_global().data(), parts_.node_global().size() * sizeof(int));
   return {static_cast<double>(m.nn), static_cast<double>(m.owned_nodes()), static_cast<double>(h >> 32),
           static_cast<double>(h & 0xffffffffu)};
 }
@@ -206,8 +206,8 @@ void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count
     it = it->first.rfind("contact/", 0) == 0 ? mine.i64.erase(it) : std::next(it);
   const std::string parts = kProcessesPrefix + "contact_parts", sizes = kProcessesPrefix + "sizes/";
   const std::vector<double> print = decomposition_print();
-  const size_t w = print.size(), r = static_cast<size_t>(comm_->rank());
-  const bool same = count == comm_->size() && whole.f64.count(parts) &&
+  const size_t w = print.size(), r = static_cast<size_t>(parts_.comm().rank());
+  const bool same = count == parts_.comm().size() && whole.f64.count(parts) &&
                     whole.f64.at(parts).size() == w * static_cast<size_t>(count) &&
                     std::equal(print.begin(), print.end(), whole.f64.at(parts).begin() + r * w);
   if (same) {
@@ -236,7 +236,7 @@ void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count
     const bool integer = whole.i64.count(name) > 0;
     std::vector<double> v = entry_values(whole, name);
     const std::string n = name;
-    if (comm_->rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
+    if (parts_.comm().rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
                                n == "contact/dissipated"))
       std::fill(v.begin(), v.end(), 0.0);
     put_entry(mine, name, v, integer);
@@ -250,7 +250,7 @@ template <int D>
 void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
                                 const std::vector<uint64_t>& own_hash) const {
   const std::vector<uint64_t> totals =
-      fdem::sum_hashes_over_processes(own_hash, [this](double* v, int n) { comm_->sum(v, n); });
+      fdem::sum_hashes_over_processes(own_hash, [this](double* v, int n) { parts_.comm().sum(v, n); });
   for (size_t k = 0; k < names.size(); ++k) {
     const uint64_t total = totals[k];
     if (!rows_checksum_matches(whole, names[k], total)) {
@@ -258,7 +258,7 @@ void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std:
       std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(total));
       throw InputError("restart file '" + whole.file + "' is damaged: dataset '" + names[k] +
                        "' fails its checksum (stored " + whole.by_rows.at(names[k]) + "; the rows read by the " +
-                       std::to_string(comm_->size()) + " processes give " + sum + ")");
+                       std::to_string(parts_.comm().size()) + " processes give " + sum + ")");
     }
   }
 }
@@ -278,12 +278,12 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
     const bool integer = local.i64.count(e.name) > 0;
     std::vector<double> v = entry_values(local, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
-    const size_t whole_n = static_cast<size_t>(e.nodes ? whole_nn_ : whole_ni_);
+    const size_t whole_n = static_cast<size_t>(e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
     // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
     // interface's (each part computes its interfaces from the same history)
     const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
-    const std::vector<int>& ids = e.nodes ? node_global_ : iface_global_;
+    const std::vector<int>& ids = e.nodes ? parts_.node_global() : parts_.iface_global();
     if (whole.by_rows.count(e.name)) {  // left in the file (write_checkpoint_rows): these rows only
       const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
       uint64_t h = 0;
@@ -314,23 +314,23 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
     if (!whole.f64.count(name)) continue;
     std::vector<double> v = whole.f64.at(name);
     const std::string parts = kProcessesPrefix + name;
-    if (count == comm_->size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
-      std::copy(whole.f64.at(parts).begin() + comm_->rank() * v.size(),
-                whole.f64.at(parts).begin() + (comm_->rank() + 1) * v.size(), v.begin());
-    else if (comm_->rank() != 0)
+    if (count == parts_.comm().size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
+      std::copy(whole.f64.at(parts).begin() + parts_.comm().rank() * v.size(),
+                whole.f64.at(parts).begin() + (parts_.comm().rank() + 1) * v.size(), v.begin());
+    else if (parts_.comm().rank() != 0)
       std::fill(v.begin(), v.end(), 0.0);
     mine.f64[name] = v;
   }
   if (contact_) load_contact_whole(whole, count, mine);
   load_state(mine);
-  exchange_ghosts();
+  parts_.exchange_ghosts(m, phase_times_.exchange);
 }
 
 template <int D>
 std::vector<double> Simulation<D>::whole_mass_momentum() const {
   double s[5];
   mass_momentum(m, s);
-  comm_->sum(s, 5);
+  parts_.comm().sum(s, 5);
   return {s[0], s[1], s[2], s[3], s[4]};
 }
 
@@ -341,11 +341,11 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
   // each node, element and interface owned once (a duplicate would also leave one without owner)
   double owned[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
                      static_cast<double>(m.owned_ifaces())};
-  comm_->sum(owned, 3);
-  if (comm_->rank() != 0) return;
+  parts_.comm().sum(owned, 3);
+  if (parts_.comm().rank() != 0) return;
   std::string diff;
-  const double whole[3] = {static_cast<double>(whole_nn_), static_cast<double>(whole_ne_),
-                           static_cast<double>(whole_ni_)};
+  const double whole[3] = {static_cast<double>(parts_.whole_nodes()), static_cast<double>(parts_.whole_elems()),
+                           static_cast<double>(parts_.whole_ifaces())};
   const char* what[3] = {"nodes", "elements", "interfaces"};
   for (int k = 0; k < 3; ++k)
     if (owned[k] != whole[k])

@@ -39,17 +39,28 @@ struct StepContributions {
   double safety = 1;           // the case's time.safety_factor
 };
 
+// The contributions that are the smallest over the items, in one list: the parts of a decomposed
+// run take the smallest of each over the parts (smallest(); over processes
+// Simulation::set_decomposition), so a new contribution listed here is reduced everywhere.
+inline constexpr double StepContributions::*kSmallestOverParts[] = {
+    &StepContributions::bulk, &StepContributions::interfaces, &StepContributions::platens,
+    &StepContributions::contact, &StepContributions::platens_on_surfaces};
+inline constexpr int kSmallestOverPartsCount =
+    static_cast<int>(sizeof kSmallestOverParts / sizeof kSmallestOverParts[0]);
+// A tripwire for the list above: a field added to StepContributions changes its size. List the
+// new field in kSmallestOverParts when it is a smallest-over-the-items contribution (most are),
+// then set the size here.
+static_assert(sizeof(StepContributions) == 9 * sizeof(double),
+              "StepContributions changed: is the new field in kSmallestOverParts? (then update this size)");
+
 // The contributions of two parts of a decomposed run of one case as one (each the smaller;
 // bulk_element, a part's own index, -1; dt_cap and safety, the case's, from a): the parts then
 // decide the whole run's time step.
 inline StepContributions smallest(const StepContributions& a, const StepContributions& b) {
   StepContributions c = a;
-  if (b.bulk < a.bulk) c.bulk = b.bulk;
+  for (auto f : kSmallestOverParts)
+    if (b.*f < c.*f) c.*f = b.*f;
   c.bulk_element = -1;
-  if (b.interfaces < c.interfaces) c.interfaces = b.interfaces;
-  if (b.platens < c.platens) c.platens = b.platens;
-  if (b.contact < c.contact) c.contact = b.contact;
-  if (b.platens_on_surfaces < c.platens_on_surfaces) c.platens_on_surfaces = b.platens_on_surfaces;
   c.has_contact = a.has_contact || b.has_contact;
   c.may_meet = a.may_meet || b.may_meet;
   return c;

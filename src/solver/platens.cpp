@@ -1,0 +1,224 @@
+// The rigid platens' host side (solver/platens.hpp): build, contact's surface nodes, ledger terms,
+// forces and loads, history columns.
+#include "solver/platens.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/error.hpp"
+#include "solver/contact_system.hpp"
+#include "solver/model_builder.hpp"
+
+namespace fdem {
+
+namespace {
+
+template <class V>
+auto mirror(const V& v) {
+  return Kokkos::create_mirror_view(v);
+}
+
+constexpr const char* kAxes[] = {"x", "y", "z"};
+
+// The outer boundary nodes (m.bnode) and their tributary areas (m.barea, per node id).
+template <int D>
+void boundary_areas(const HostMesh& mesh, Model<D>& m) {
+  const auto faces = boundary_faces(mesh);
+  std::map<int, double> area;
+  const int nf = static_cast<int>(faces.size()) / D;
+  for (int fi = 0; fi < nf; ++fi) {
+    double meas;
+    const double* p0 = &mesh.X[static_cast<size_t>(faces[fi * D]) * D];
+    const double* p1 = &mesh.X[static_cast<size_t>(faces[fi * D + 1]) * D];
+    if constexpr (D == 2) {
+      meas = std::hypot(p1[0] - p0[0], p1[1] - p0[1]) * m.thickness;
+    } else {
+      const double* p2 = &mesh.X[static_cast<size_t>(faces[fi * D + 2]) * D];
+      double a[3], b[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = p1[k] - p0[k];
+        b[k] = p2[k] - p0[k];
+      }
+      meas = triangle_area(a, b);
+    }
+    for (int k = 0; k < D; ++k) area[faces[fi * D + k]] += meas / D;
+  }
+  // one part of a decomposed run: the platens act on its own nodes (the ghosts take their owners'
+  // state), whose boundary faces it holds all of (src/parallel/decompose.hpp)
+  if (mesh.owned_nodes >= 0)
+    for (auto it = area.begin(); it != area.end();) it = it->first >= mesh.owned_nodes ? area.erase(it) : ++it;
+  m.nb = static_cast<int>(area.size());
+  m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
+  m.barea = Kokkos::View<double*>("fdem::barea", m.nn);
+  auto bn_h = mirror(m.bnode);
+  auto ba_h = mirror(m.barea);
+  int b = 0;
+  for (const auto& [node, a] : area) {
+    bn_h(b) = node;
+    ba_h(node) = a;
+    ++b;
+  }
+  Kokkos::deep_copy(m.bnode, bn_h);
+  Kokkos::deep_copy(m.barea, ba_h);
+}
+
+// The platens (after boundary_areas) and their springs' storage; their names into `names`.
+// Returns the platen springs' stable step on the boundary nodes.
+template <int D>
+double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, std::vector<std::string>& names) {
+  if (static_cast<int>(c.platens.size()) > kMaxPlatens)
+    throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
+  auto bn_h = mirror(m.bnode);
+  auto ba_h = mirror(m.barea);
+  Kokkos::deep_copy(bn_h, m.bnode);
+  Kokkos::deep_copy(ba_h, m.barea);
+  double step = std::numeric_limits<double>::infinity();
+  m.platens.count = static_cast<int>(c.platens.size());
+  for (int p = 0; p < m.platens.count; ++p) {
+    const auto& ps = c.platens[p];
+    PlatenDev& P = m.platens.p[p];
+    double nlen = 0;
+    for (int k = 0; k < 3; ++k) nlen += ps.normal[k] * ps.normal[k];
+    nlen = std::sqrt(nlen);
+    for (int k = 0; k < 3; ++k) {
+      P.p0[k] = ps.point[k];
+      P.n[k] = ps.normal[k] / nlen;
+      P.vel[k] = ps.velocity[k];
+      P.vel2[k] = ps.has_change ? ps.change_velocity[k] : ps.velocity[k];
+    }
+    P.tc = ps.has_change ? ps.change_time : std::numeric_limits<double>::infinity();
+    P.kn = ps.kn;  // derived values filled by resolve_defaults (io/case.hpp)
+    P.ks = ps.ks;
+    P.mu = ps.friction;
+    P.coh = ps.cohesion;
+    names.push_back(ps.name);
+    for (int bb = 0; bb < m.nb; ++bb) {
+      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) / mass[bn_h(bb)]);
+      step = std::min(step, 2.0 / w);
+    }
+  }
+  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
+  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
+  return step;
+}
+
+// With contact: the platen springs' stable step on every potential surface node at its largest
+// contact area amax.
+template <int D>
+double surface_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass) {
+  double step = std::numeric_limits<double>::infinity();
+  for (int p = 0; p < m.platens.count; ++p) {
+    const PlatenDev& P = m.platens.p[p];
+    for (int i = 0; i < m.nn; ++i)
+      if (amax[i] > 0 && mass[i] > 0)
+        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
+  }
+  return step;
+}
+
+}  // namespace
+
+template <int D>
+void Platens<D>::build(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
+                       StepContributions& sc) {
+  if (!c.platens.empty()) {
+    boundary_areas<D>(mesh, m);
+    sc.platens = platens_of<D>(c, mass, m, names_);
+  }
+  m.platen_acc = Kokkos::View<double* [kPlatenAcc]>("fdem::platen_acc", std::max(1, m.platens.count));
+  acc_host_ = Kokkos::create_mirror_view(m.platen_acc);
+}
+
+template <int D>
+void Platens<D>::contact_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
+                              StepContributions& sc) const {
+  sc.platens_on_surfaces = surface_step<D>(m, amax, mass);
+}
+
+template <int D>
+bool Platens<D>::surfaces_changed(const ContactSystem<D>& contact) const {
+  return contact.surface_version() != surface_version_;
+}
+
+template <int D>
+void Platens<D>::follow_surfaces(Model<D>& m, const ContactSystem<D>& contact, double t) {
+  surface_version_ = contact.surface_version();
+  if (m.platens.count == 0) return;
+  const int ns = contact.own_surface_nodes();  // (a part: the platens act on its own nodes)
+  m.bnode = contact.surface_node_list();       // its first ns entries
+  m.nb = ns;
+  grow_platen_areas<D>(m, contact.surface().narea, ns, t);
+}
+
+template <int D>
+void Platens<D>::copy_accumulators(const Model<D>& m, long stamp) const {
+  if (cached_at_ == stamp) return;
+  Kokkos::deep_copy(acc_host_, m.platen_acc);
+  cached_at_ = stamp;
+}
+
+template <int D>
+void Platens<D>::book(const Model<D>& m, double t, double dt, long stamp, double& work, double& friction) const {
+  // Works done by time t: everything before this step plus the part of this step's increment
+  // (centred on x(n): over [t - dt/2, t + dt/2]) up to t.
+  copy_accumulators(m, stamp);
+  for (int p = 0; p < m.platens.count; ++p) {
+    double inc = 0;
+    for (int k = 0; k < 3; ++k)
+      inc += acc_host_(p, kPlatenForce + k) * m.platens.p[p].mean_velocity(k, t, 0.5 * dt) * dt;
+    work += acc_host_(p, kPlatenWork) - 0.5 * inc;
+    friction += acc_host_(p, kPlatenFriction);
+  }
+}
+
+template <int D>
+std::vector<std::array<double, 3>> Platens<D>::forces(const Model<D>& m, const Parts<D>& parts, long stamp) const {
+  copy_accumulators(m, stamp);
+  std::vector<std::array<double, 3>> out(m.platens.count);
+  for (int p = 0; p < m.platens.count; ++p)
+    for (int k = 0; k < 3; ++k) out[p][k] = acc_host_(p, kPlatenForce + k);
+  if (!out.empty()) {  // the parts' own boundary nodes: summed, the whole body's
+    std::vector<double> flat;
+    for (const auto& f : out) flat.insert(flat.end(), f.begin(), f.end());
+    parts.sum(flat.data(), static_cast<int>(flat.size()));
+    for (size_t i = 0; i < flat.size(); ++i) out[i / 3][i % 3] = flat[i];
+  }
+  return out;
+}
+
+template <int D>
+double Platens<D>::displacement(const PlatenDev& P, double at) {
+  double s2 = 0;
+  for (int k = 0; k < 3; ++k) s2 += P.shift(k, at) * P.shift(k, at);
+  return std::sqrt(s2);
+}
+
+template <int D>
+void Platens<D>::add_columns(std::vector<std::string>& cols) const {
+  for (const auto& name : names_) {
+    cols.push_back(name + "_displacement [m]");
+    for (int k = 0; k < D; ++k) cols.push_back(name + "_force_" + kAxes[k] + " [N]");
+    cols.push_back(name + "_load [N]");
+  }
+}
+
+template <int D>
+void Platens<D>::append_row(const Model<D>& m, const std::vector<std::array<double, 3>>& forces, double t,
+                            std::vector<double>& row) const {
+  for (int p = 0; p < m.platens.count; ++p) {
+    const auto& F = forces[p];
+    const auto& P = m.platens.p[p];
+    row.push_back(displacement(P, t));
+    for (int k = 0; k < D; ++k) row.push_back(F[k]);
+    row.push_back(load(P, F));
+  }
+}
+
+template class Platens<2>;
+template class Platens<3>;
+
+}  // namespace fdem

@@ -1,0 +1,88 @@
+#pragma once
+// The rigid platens' host side, in one place (docs/developing.md, "The module shape"): their build
+// (the outer boundary's nodes and areas, the platens, their springs' storage and stable steps),
+// the step's call, the surface nodes they act on once contact has surfaces, their terms of the
+// energy ledger, their forces, loads and displacements, their history columns and their checkpoint
+// entries. The device side is kernels/platens.hpp (the penalty and Coulomb spring on each node,
+// the energy, the areas of new surface nodes). Simulation owns one and calls it; nothing else
+// about platens lives in the solver.
+#include <array>
+#include <string>
+#include <vector>
+
+#include "io/case.hpp"
+#include "kernels/platens.hpp"
+#include "mesh/mesh.hpp"
+#include "parallel/parts.hpp"
+#include "solver/stable_step.hpp"
+
+namespace fdem {
+
+template <int D>
+class ContactSystem;
+
+template <int D>
+class Platens {
+ public:
+  // The case's platens on the outer boundary nodes of `mesh` (a part's own ones), their springs'
+  // storage and the accumulators (one row even without platens); the springs' stable step on the
+  // boundary nodes into sc.platens. mass: the lumped nodal masses.
+  void build(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
+             StepContributions& sc);
+  // With contact: the springs' stable step on every potential surface node at its largest contact
+  // area (ContactSystem::potential_area) into sc.platens_on_surfaces.
+  void contact_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
+                    StepContributions& sc) const;
+  // With contact: the platens act on the contact system's own surface nodes with their areas (on
+  // the first call and whenever the surfaces have changed since the last).
+  void follow_surfaces(Model<D>& m, const ContactSystem<D>& contact, double t);
+  bool surfaces_changed(const ContactSystem<D>& contact) const;
+
+  // The step's call: the springs' forces into m.f and the accumulators (kernels/platens.hpp).
+  void apply(const Model<D>& m, double t, double dt) const { apply_platens<D>(m, t, dt); }
+
+  // The ledger's terms (solver/ledger.hpp). Stored: the springs' energy at time t. After the node
+  // update of a sampled step: the work done by time t (the accumulated work less the half of this
+  // step's increment after t) and the friction dissipated, from one copy of the accumulators, which
+  // then serves forces() until the next step (`stamp`: the steps done after this one).
+  double stored_energy(const Model<D>& m, double t) const { return platen_energy<D>(m, t); }
+  void book(const Model<D>& m, double t, double dt, long stamp, double& work, double& friction) const;
+
+  // Each platen's force on the body (3 components) of the last step, summed over the processes;
+  // `stamp`: the steps done (a copy of the accumulators is taken unless book() took one for it).
+  std::vector<std::array<double, 3>> forces(const Model<D>& m, const Parts<D>& parts, long stamp) const;
+  // The load: the force along the platen's normal.
+  static double load(const PlatenDev& P, const std::array<double, 3>& F) {
+    return F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
+  }
+  // Its displacement along its velocity direction at time `at`.
+  static double displacement(const PlatenDev& P, double at);
+  const std::vector<std::string>& names() const { return names_; }
+
+  // history.csv: per platen its displacement, force components and load; and a row's values.
+  void add_columns(std::vector<std::string>& cols) const;
+  void append_row(const Model<D>& m, const std::vector<std::array<double, 3>>& forces, double t,
+                  std::vector<double>& row) const;
+
+  // Checkpoint entries (one list for save and load: Simulation::checkpoint_fields).
+  template <class Fields>
+  void checkpoint_fields(Fields& f, Model<D>& m) {
+    f.view("model/platen_fs", m.platen_fs);
+    f.view("model/platen_g0", m.platen_g0);
+    f.view("model/platen_area", m.barea, m.barea.extent(0) > 0);
+    f.view("model/platen_acc", m.platen_acc);
+    cached_at_ = -1;  // (loaded: the next forces() copies)
+  }
+
+ private:
+  std::vector<std::string> names_;
+  long surface_version_ = -1;  // contact surfaces the node list was taken from
+  mutable long cached_at_ = -1;  // the stamp of acc_host_'s copy
+  mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenAcc]>())) acc_host_;
+  void copy_accumulators(const Model<D>& m, long stamp) const;
+};
+
+extern template class Platens<2>;
+extern template class Platens<3>;
+
+}  // namespace fdem
