@@ -11,9 +11,10 @@ namespace fdem {
 
 struct Case;
 struct HostMesh;
-struct StateArrays;
 class Comm;
 
+// What the user sets for a run (the command line's options). The state of the run itself (the
+// cuts of the parts anew over several processes: CutHistory, solver/run_state.hpp) is the run's.
 struct RunOptions {
   std::string out_dir;                // default: ./out/<case name>
   std::vector<std::string> overrides;  // --set key.path=value
@@ -30,33 +31,6 @@ struct RunOptions {
   // and process 0 writes the outputs (docs/parallel.md: what such a run does not do yet is refused
   // with the key to change).
   std::shared_ptr<const Comm> comm;
-  // Set by run_case over several processes with contact (solver/run.cpp): where the run loop leaves
-  // the whole state when the parts are to be cut anew (Simulation::recut_due), the cuts so far, and
-  // the checkpoint the run first went on from (null: none).
-  StateArrays* recut = nullptr;
-  int recuts = 0;
-  // Of those cuts, the ones the balance asked for (Simulation::recut_reason "work"), the excess of the
-  // most loaded process's work over the mean that asked for each, and the excess at the first
-  // check after each cut (docs/parallel.md "Rebalancing"); and on process 0 each element's part at
-  // the last cut (a checkpoint holds it: a restart on as many processes cuts its parts the same).
-  int rebalances = 0;
-  std::vector<double> excess_at_rebalances, excess_after_cuts;
-  double excess_largest = 0;
-  std::string last_cut_reason;  // for the progress note of the cut
-  // Each cut of this invocation: why ("work", "zones", "test"; Simulation::recut_reason) and, on
-  // process 0, how many elements changed process; and the elements moved by all the run's cuts
-  // (a checkpoint holds it).
-  std::vector<std::string> cut_reasons;
-  std::vector<long long> elements_moved_at_cuts;
-  long long elements_moved = 0;
-  // This process's time in the loop outside the exchange (which includes waiting for the others)
-  // in the parts before the last cut: the measured side of the balance.
-  double busy_seconds = 0;
-  // The wall time of the cuts so far (process 0's; the others wait for it): the whole state
-  // gathered, the partition, the parts and state sent, the new parts set up and checked.
-  double cut_seconds = 0;
-  std::vector<int> cut_parts;
-  const StateArrays* restarted = nullptr;
 };
 
 // Runs a case; returns the summary written to out_dir/summary.json. Throws InputError (bad input,

@@ -13,62 +13,98 @@ namespace fdem {
 
 namespace {
 double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+// What a run over several processes (part: this process's part) reads that one process (part
+// null) does not: the mesh this process's model is built from, and the history table's part.
+const HostMesh& model_mesh(const HostMesh& whole, const SubMesh* part) { return part ? part->mesh : whole; }
+const HostMesh* history_part(const SubMesh* part) { return part ? &part->mesh : nullptr; }
 }  // namespace
 
 template <int D>
 RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                    const RunIdentity& id, const StateArrays* restart, const SubMesh* part)
+                    const RunIdentity& id, const StateArrays* restart, const SubMesh* part, CutHistory* cuts)
     : c_(c),
       mesh_(std::make_unique<HostMesh>(std::move(mesh))),
       out_(out),
       opt_(opt),
       id_(id),
       restart_(restart),
+      cuts_(cuts ? cuts : &no_cuts_),
       wall0_(Clock::now()),
       loop0_(wall0_),
-      sim_(c, part ? part->mesh : *mesh_),
+      sim_(c, model_mesh(*mesh_, part)),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
-  whole_ifaces_ = mesh_->num_ifaces();
-  if (part) {
-    sim_.set_decomposition(opt.comm, *part);
-    writes_ = opt.comm->rank() == 0;
-    whole_ifaces_ = part->whole_ifaces;
-  }
+  join_parts(part);
+  writes_ = sim_.parts().root();
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
-  if (restart && part) sim_.load_state_whole(*restart);  // the whole run's state: this part's rows
-  else if (restart) sim_.load_state(*restart);
-  if (restart && part && restart == opt.recut) check_recut(*restart);
-  // a checkpoint's balance (the excess after the last cut decides the next rebalance): as it was,
-  // on as many processes (on another count the first check measures it anew)
-  if (restart && part && restart != opt.recut && restart->f64.count("processes/balance") &&
-      restart->has("processes/count") && restart->get_int("processes/count") == opt.comm->size())
-    sim_.restore_balance(restart->array("processes/balance", 2));
-  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, part ? &part->mesh : nullptr);
+  counts_ = whole_counts();
+  whole_ifaces_ = counts_.at("interfaces").get<long>();
+  if (restart) load_restart(*restart);
+  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, history_part(part));
   if (restart) {
-    restore(*restart, part != nullptr);
+    restore(*restart);
   } else {
     if (writes_) history_->open(out, false);
-    if (fragments_on())
-      frag_ = part ? std::make_unique<RunFragments<D>>(sim_, c, *mesh_, out, writes_)
-                   : std::make_unique<RunFragments<D>>(sim_.m, out);
+    if (fragments_on()) frag_ = make_fragments(nullptr, "");
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
-  if (part && !writes_)  // this process holds no whole mesh: its counts, for the summary it does not write
-    counts_ = {{"nodes", part->whole_nodes}, {"elements", part->whole_elems}, {"interfaces", part->whole_ifaces}};
-  else
-    counts_ = mesh_report(*mesh_);
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
 }
 
+// Over several processes: this process's part joins the run's decomposition (the processes agree
+// on the time step, the ghosts take their owners' state: Simulation::set_decomposition). One
+// process (part null) keeps the trivial one.
+template <int D>
+void RunLoop<D>::join_parts(const SubMesh* part) {
+  if (part) sim_.set_decomposition(opt_.comm, *part);
+}
+
+// For summary.json and the checkpoint header. A process of several that holds no whole mesh (not
+// process 0) takes the counts from its part, for the summary it does not write.
+template <int D>
+nlohmann::json RunLoop<D>::whole_counts() const {
+  if (writes_) return mesh_report(*mesh_);
+  const Parts<D>& p = sim_.parts();
+  return {{"nodes", p.whole_nodes()}, {"elements", p.whole_elems()}, {"interfaces", p.whole_ifaces()}};
+}
+
+// Over several processes the whole run's state: each part takes its rows; after a cut it checks
+// them; from a checkpoint on as many processes the balance is as it was (the excess after the last
+// cut decides the next rebalance; on another count the first check measures it anew). One
+// process: its checkpoint's state.
+template <int D>
+void RunLoop<D>::load_restart(const StateArrays& r) {
+  if (!sim_.parts().many()) {
+    sim_.load_state(r);
+    return;
+  }
+  sim_.load_state_whole(r);
+  if (began_at_cut())
+    check_recut(r);
+  else if (r.f64.count("processes/balance") && r.has("processes/count") &&
+           r.get_int("processes/count") == sim_.parts().size())
+    sim_.restore_balance(r.array("processes/balance", 2));
+}
+
+// Fragments: over several processes process 0 labels the whole mesh's from every part's interface
+// histories (the others send theirs); one process labels its model's.
+template <int D>
+std::unique_ptr<RunFragments<D>> RunLoop<D>::make_fragments(const RunState* restart,
+                                                            const std::string& file) {
+  if (sim_.parts().many())
+    return std::make_unique<RunFragments<D>>(sim_, c_, *mesh_, out_, writes_, restart, file);
+  return std::make_unique<RunFragments<D>>(sim_.m, out_, restart, file);
+}
+
 // The run loop's state from the checkpoint (every process of several: the same); history.csv,
 // fragments.csv and snapshots.h5 (process 0's) cut back to it.
 template <int D>
-void RunLoop<D>::restore(const StateArrays& r, bool parts) {
+void RunLoop<D>::restore(const StateArrays& r) {
   RunState s;
   s.load(r, sim_.m.platens.count);
   history_->restore(s, r.file);
@@ -78,25 +114,23 @@ void RunLoop<D>::restore(const StateArrays& r, bool parts) {
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   if (writes_) history_->open(out_, true);
-  if (fragments_on())
-    frag_ = parts ? std::make_unique<RunFragments<D>>(sim_, c_, *mesh_, out_, writes_, &s, r.file)
-                  : std::make_unique<RunFragments<D>>(sim_.m, out_, &s, r.file);
+  if (fragments_on()) frag_ = make_fragments(&s, r.file);
   snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
 }
 
 template <int D>
 void RunLoop<D>::announce() const {
-  if (!opt_.progress || (restart_ && restart_ == opt_.recut)) return;  // (a cut: said at the start)
+  if (!opt_.progress || began_at_cut()) return;  // (a cut: said at the start)
   std::fprintf(stderr,
                "fdem: %s: %d nodes, %d elements, %d interfaces; dt = %.3e s (%.2f x critical %.3e s); "
                "%.0f steps to end_time\n",
                c_.name.c_str(), sim_.m.nn, sim_.m.ne, sim_.m.ni, sim_.dt, sim_.dt / sim_.stable.critical,
                sim_.stable.critical, std::ceil(c_.end_time / sim_.dt));
-  if (const Comm* comm = sim_.comm())
+  if (sim_.parts().many())
     std::fprintf(stderr,
                  "fdem: %d processes; this one (0) holds %d of the nodes (%d ghosts), %d elements (%d ghosts); "
                  "ghost positions sent per step: %ld bytes\n",
-                 comm->size(), sim_.m.nn, sim_.m.nn - sim_.m.owned_nodes(), sim_.m.ne,
+                 sim_.parts().size(), sim_.m.nn, sim_.m.nn - sim_.m.owned_nodes(), sim_.m.ne,
                  sim_.m.ne - sim_.m.owned_elems(), sim_.exchange_bytes());
   if (sim_.stable.contact_pending)
     std::fprintf(stderr,
@@ -106,21 +140,21 @@ void RunLoop<D>::announce() const {
 }
 
 template <int D>
-nlohmann::json RunLoop<D>::run() {
+LoopEnd RunLoop<D>::run() {
   if (!restart_) {
     setup_times::Phase outputs("output_setup");
     snaps_->take(sim_, frag_.get());
-  } else if (opt_.progress && restart_ == opt_.recut) {
+  } else if (opt_.progress && began_at_cut()) {
     progress_->note("fdem: step " + std::to_string(sim_.step_count) + ": the parts cut anew at the current "
-                    "positions (" + std::to_string(opt_.recuts) + (opt_.recuts == 1 ? " cut" : " cuts") +
-                    " so far; " + opt_.last_cut_reason + ")");
+                    "positions (" + std::to_string(cuts_->recuts) + (cuts_->recuts == 1 ? " cut" : " cuts") +
+                    " so far; " + cuts_->last_cut_reason + ")");
   } else if (opt_.progress) {
     std::fprintf(stderr,
                  "fdem: restarting from %s at step %ld, t = %.6e s (%zu history rows, %d snapshots kept)\n",
                  restart_->file.c_str(), sim_.step_count, sim_.t, history_->rows(), snaps_->frames());
   }
   setup_times::finish();
-  if (opt_.progress && !(restart_ && restart_ == opt_.recut)) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
+  if (opt_.progress && !began_at_cut()) std::fprintf(stderr, "fdem: %s\n", setup_times::line().c_str());
   std::string stop_reason = "end_time";
   loop0_ = Clock::now();
   pace_step0_ = sim_.step_count;
@@ -155,7 +189,7 @@ nlohmann::json RunLoop<D>::run() {
   progress_->done();
   if (!schedule_.last_was_row()) final_row();
   snaps_->take(sim_, frag_.get());
-  return finish(stop_reason, loop_wall);
+  return {LoopEnd::Kind::finished, finish(stop_reason, loop_wall), {}};
 }
 
 // The run stopped by a signal after a step: a checkpoint of this moment (a restart goes on as if
@@ -164,19 +198,18 @@ nlohmann::json RunLoop<D>::run() {
 template <int D>
 int RunLoop<D>::interrupt_signal() const {
   const int here = opt_.interrupt ? static_cast<int>(*opt_.interrupt) : 0;
-  const Comm* comm = sim_.comm();
-  if (!comm) return here;
   // Over several processes a signal reaches each at its own moment: they look together, every
   // kInterruptPoll steps, and stop at the same step if any has one (else some would wait forever
-  // for the others' exchange).
-  if (sim_.step_count % kInterruptPoll != 0) return 0;
+  // for the others' exchange). One process looks at every step (the minimum over it: its own).
+  const long every = sim_.parts().many() ? kInterruptPoll : 1;
+  if (sim_.step_count % every != 0) return 0;
   double v = -static_cast<double>(here);
-  comm->min(&v, 1);
+  sim_.parts().min(&v, 1);
   return static_cast<int>(-v);
 }
 
 template <int D>
-nlohmann::json RunLoop<D>::interrupted() {
+LoopEnd RunLoop<D>::interrupted() {
   const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
   progress_->done();
@@ -189,8 +222,8 @@ nlohmann::json RunLoop<D>::interrupted() {
                  "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
                  "run %s --restart %s (and the same --set options%s)\n",
                  name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str(),
-                 sim_.comm() ? "; under mpirun with any number of processes, or without" : "");
-  return finish("interrupted", loop_wall);
+                 sim_.parts().many() ? "; under mpirun with any number of processes, or without" : "");
+  return {LoopEnd::Kind::interrupted, finish("interrupted", loop_wall), {}};
 }
 
 // One step; `row`: sampled for a history row (reactions too), `check`: energies sampled and the
@@ -234,17 +267,7 @@ void RunLoop<D>::final_row() {
 template <int D>
 bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long written,
                                std::vector<RowPart>* rows) {
-  if (sim_.comm()) {  // the whole run's state on process 0 (the per-row entries: `rows`, each its own)
-    sim_.save_state_whole(st, rows);
-    if (!writes_) return false;
-    st.put_int("processes/contact_recuts", opt_.recuts);  // (how a restart cuts its parts: run.cpp)
-    st.put_int("processes/rebalances", opt_.rebalances);
-    st.put_int("processes/elements_moved", opt_.elements_moved);
-    st.f64["processes/balance"] = {sim_.balance().after_cut, sim_.balance().largest};
-    if (!opt_.cut_parts.empty()) st.i64["processes/cut_parts"].assign(opt_.cut_parts.begin(), opt_.cut_parts.end());
-  } else {
-    sim_.save_state(st);
-  }
+  if (!save_simulation_state(st, rows)) return false;
   RunState s;
   history_->save(s);
   if (frag_) frag_->save(s);
@@ -258,16 +281,32 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
   return true;
 }
 
+// Over several processes the whole run's state on process 0 (the per-row entries: `rows`, each
+// its own), with the cuts so far (how a restart cuts its parts: solver/run.cpp) and the balance.
+// One process: its own state.
 template <int D>
-double RunLoop<D>::cut_setup_seconds() const {
-  return restart_ && restart_ == opt_.recut ? seconds(loop0_ - wall0_) : 0.0;
+bool RunLoop<D>::save_simulation_state(StateArrays& st, std::vector<RowPart>* rows) const {
+  if (!sim_.parts().many()) {
+    sim_.save_state(st);
+    return true;
+  }
+  sim_.save_state_whole(st, rows);
+  if (!writes_) return false;
+  cuts_->save(st);
+  st.f64["processes/balance"] = {sim_.balance().after_cut, sim_.balance().largest};
+  return true;
 }
 
 template <int D>
-nlohmann::json RunLoop<D>::recut() {
+double RunLoop<D>::cut_setup_seconds() const {
+  return began_at_cut() ? seconds(loop0_ - wall0_) : 0.0;
+}
+
+template <int D>
+LoopEnd RunLoop<D>::recut() {
   const auto c0 = Clock::now();
   const double busy = seconds(c0 - loop0_) - sim_.phase_times().exchange;
-  StateArrays& st = *opt_.recut;
+  StateArrays& st = cuts_->state;
   st = StateArrays{};
   collect_state(st, c0, ckpt_written_);
   st.f64["recut/mass_momentum"] = sim_.whole_mass_momentum();
@@ -276,9 +315,17 @@ nlohmann::json RunLoop<D>::recut() {
   // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
   // new parts' set-up (the next RunLoop's, until its loop starts); this part's own set-up if it
   // began at a cut
-  return {{"recut", true},        {"reason", sim_.recut_reason()}, {"excess", b.excess},
-          {"after_cut", b.after_cut}, {"largest", b.largest},        {"busy", busy},
-          {"gather_seconds", seconds(Clock::now() - c0)}, {"setup_seconds", cut_setup_seconds()}};
+  LoopEnd end;
+  end.kind = LoopEnd::Kind::cut_due;
+  CutRequest& cut = end.cut;
+  cut.reason = sim_.recut_reason();
+  cut.excess = b.excess;
+  cut.after_cut = b.after_cut;
+  cut.largest = b.largest;
+  cut.busy = busy;
+  cut.gather_seconds = seconds(Clock::now() - c0);
+  cut.setup_seconds = cut_setup_seconds();
+  return end;
 }
 
 // After a cut (every cut: the check costs one more gather of the state): the new parts hold the
@@ -308,8 +355,9 @@ void RunLoop<D>::save_checkpoint() {
   const auto c0 = Clock::now();
   StateArrays st;
   std::vector<RowPart> rows;  // with the parallel HDF5: this process's rows, which it writes
-  const Comm* comm = sim_.comm();
-  const long long fapl = comm && !gather_outputs() ? comm->h5_parallel_access() : -1;  // (collective)
+  const Parts<D>& parts = sim_.parts();
+  // over several processes with the parallel HDF5 each writes its rows (collective)
+  const long long fapl = parts.many() && !gather_outputs() ? parts.comm().h5_parallel_access() : -1;
   if (!collect_state(st, c0, ckpt_written_ + 1, fapl >= 0 ? &rows : nullptr) && fapl < 0) {
     ++ckpt_written_;  // (process 0 writes the one file)
     ckpt_wall_ += seconds(Clock::now() - c0);
@@ -326,7 +374,7 @@ void RunLoop<D>::save_checkpoint() {
   h.step = sim_.step_count;
   if (fapl >= 0)
     write_checkpoint_rows(out_ + "/checkpoint.h5", h, st, rows,
-                          {fapl, writes_, [comm](double* v, int n) { comm->sum(v, n); }});
+                          {fapl, writes_, [&parts](double* v, int n) { parts.sum(v, n); }});
   else
     write_checkpoint(out_ + "/checkpoint.h5", h, st);
   ++ckpt_written_;
@@ -355,7 +403,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
   r.checkpoint_every = schedule_.checkpoint_every();
   r.checkpoint_seconds = ckpt_wall_;
   r.checkpoints_written = ckpt_written_;
-  r.restart = opt_.recuts > 0 ? opt_.restarted : restart_;
+  r.restart = cuts_->recuts > 0 ? cuts_->restarted : restart_;
   r.signal = signal_;
   nlohmann::json summary = run_summary(c_, counts_, sim_, *history_, frag_.get(), r);
   if (!pace_.empty()) {
@@ -364,65 +412,25 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
       marks.push_back({{"fraction", p.tenth / 10.0}, {"step", p.step}, {"loop_seconds", p.loop_seconds}});
     summary["pace"] = {{"from_step", pace_step0_}, {"from_time", pace_t0_}, {"marks", marks}};
   }
-  if (const Comm* comm = sim_.comm()) {  // a run over several processes
-    double bytes[2] = {static_cast<double>(sim_.exchange_bytes()), sim_.phase_times().exchange};
-    double most[2] = {-bytes[0], -bytes[1]};
-    comm->sum(bytes, 2);
-    comm->min(most, 2);
-    std::vector<double> peaks, busy;  // every process's peak resident memory, on process 0
-    comm->gather({setup_times::peak_rss_bytes()}, peaks);
-    // the loop's time outside the exchange (which includes the waits for the others), every cut's
-    // parts included: the measured balance
-    const double busy_here = opt_.busy_seconds + seconds(Clock::now() - loop0_) - sim_.phase_times().exchange;
-    comm->gather(std::vector<double>{busy_here}, busy);
-    const double cut_seconds = opt_.cut_seconds + cut_setup_seconds();
-    const auto& b = sim_.balance();
-    std::vector<double> after = opt_.excess_after_cuts;
-    if (b.after_cut >= 0) after.push_back(b.after_cut);
-    summary["processes"] = {{"count", comm->size()},
-                            {"contact_recuts", opt_.recuts},
-                            {"rebalances", opt_.rebalances},
-                            {"cut_reasons", opt_.cut_reasons},
-                            {"elements_moved", opt_.elements_moved},
-                            {"elements_moved_at_cuts", opt_.elements_moved_at_cuts},
-                            {"cut_seconds", cut_seconds},
-                            {"exchange_bytes_per_step", bytes[0]},
-                            {"exchange_bytes_per_step_most", -most[0]},
-                            {"exchange_seconds_most", -most[1]},
-                            {"gpu_aware_mpi", comm->gpu_aware()},
-                            {"peak_rss_bytes", peaks},
-                            {"busy_seconds", busy}};
-    if (b.after_cut >= 0) {  // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
-      nlohmann::json& p = summary["processes"];
-      p["rebalance_above"] = c_.rebalance_above;
-      const WorkModel& wm = c_.work_model;
-      p["work_model_ns"] = {{"element", wm.element}, {"interface", wm.interface}, {"node", wm.node},
-                            {"contact_unit", wm.contact_unit}};
-      p["work_excess"] = b.excess;
-      p["work_excess_largest"] = std::max(b.largest, opt_.excess_largest);
-      p["work_excess_at_rebalances"] = opt_.excess_at_rebalances;
-      p["work_excess_after_cuts"] = after;
-      p["work_ns_per_step_most"] = b.work_most;
-      p["work_ns_per_step_mean"] = b.work_mean;
-    }
-  }
+  if (sim_.parts().many())  // a run over several processes (collective)
+    summary["processes"] = processes_report(c_, sim_, *cuts_, loop0_, cut_setup_seconds());
   if (writes_) write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   if (writes_) print_run_end(summary, r, sim_.step_count, opt_.progress);
   return summary;
 }
 
 template <int D>
-nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                       const RunIdentity& id, const StateArrays* restart, const SubMesh* part) {
-  RunLoop<D> run(c, std::move(mesh), out, opt, id, restart, part);
+LoopEnd run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
+                const RunIdentity& id, const StateArrays* restart, const SubMesh* part, CutHistory* cuts) {
+  RunLoop<D> run(c, std::move(mesh), out, opt, id, restart, part, cuts);
   return run.run();
 }
 
 template class RunLoop<2>;
 template class RunLoop<3>;
-template nlohmann::json run_dim<2>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
-                                   const RunIdentity&, const StateArrays*, const SubMesh*);
-template nlohmann::json run_dim<3>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
-                                   const RunIdentity&, const StateArrays*, const SubMesh*);
+template LoopEnd run_dim<2>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
+                            const RunIdentity&, const StateArrays*, const SubMesh*, CutHistory*);
+template LoopEnd run_dim<3>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
+                            const RunIdentity&, const StateArrays*, const SubMesh*, CutHistory*);
 
 }  // namespace fdem

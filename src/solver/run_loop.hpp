@@ -22,6 +22,30 @@
 
 namespace fdem {
 
+// The parts of a run over several processes are to be cut anew (Simulation::recut_due): why, the
+// balance then, and the times of the parts that end (the run over processes, solver/run.cpp,
+// records them in its CutHistory and cuts the parts).
+struct CutRequest {
+  std::string reason;  // Simulation::recut_reason
+  // Simulation::Balance: the excess at the last check, at the first check after the last cut, and
+  // the largest seen
+  double excess = 0, after_cut = 0, largest = 0;
+  double busy = 0;  // this process's time in the loop outside the exchange
+  // the cut's time so far: the whole state gathered; the set-up of the parts that end, when they
+  // began at a cut (RunLoop::cut_setup_seconds)
+  double gather_seconds = 0, setup_seconds = 0;
+};
+
+// How RunLoop::run ended: the run finished (at the end time, the step limit or the stop rule) or a
+// signal interrupted it (summary: what out/summary.json holds), or the parts are to be cut anew
+// (cut; the whole state is in the CutHistory's state, solver/run_state.hpp).
+struct LoopEnd {
+  enum class Kind { finished, interrupted, cut_due };
+  Kind kind = Kind::finished;
+  nlohmann::json summary;
+  CutRequest cut;
+};
+
 template <int D>
 class RunLoop {
  public:
@@ -29,16 +53,26 @@ class RunLoop {
   // mesh is freed once the model and the outputs are set up (the run does not need it).
   // part: this process's part of a run over several processes (opt.comm), the model built from
   // it; mesh is then the whole mesh on process 0 (outputs, counts) and an empty one with the
-  // dimension and body count on the others. Null: one process.
+  // dimension and body count on the others. cuts: that run's cuts of the parts anew so far, owned
+  // by the run over processes (solver/run.cpp); restart is &cuts->state when the parts begin at a
+  // cut. Both null: one process.
   RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-          const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr);
-  // Runs to the end time (or the step limit, or the stop rule); returns the summary written to
-  // out/summary.json.
-  nlohmann::json run();
+          const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr,
+          CutHistory* cuts = nullptr);
+  // Runs to the end time (or the step limit, or the stop rule, or a signal; the summary written to
+  // out/summary.json) or to a cut of the parts anew.
+  LoopEnd run();
 
  private:
   using Clock = std::chrono::steady_clock;
-  void restore(const StateArrays& r, bool parts);
+  // Over several processes: this process's part joins the run's decomposition.
+  void join_parts(const SubMesh* part);
+  // The whole mesh's counts (mesh_report on the process that holds it, else the part's).
+  nlohmann::json whole_counts() const;
+  // The state to go on from (a checkpoint's, or the whole state at a cut).
+  void load_restart(const StateArrays& r);
+  void restore(const StateArrays& r);
+  std::unique_ptr<RunFragments<D>> make_fragments(const RunState* restart, const std::string& file);
   void announce() const;
   void step(bool row, bool check);
   void history_row();
@@ -49,11 +83,15 @@ class RunLoop {
   // rows: see Simulation::save_state_whole.
   bool collect_state(StateArrays& st, Clock::time_point c0, long written,
                      std::vector<RowPart>* rows = nullptr);
-  // The parts are to be cut anew (Simulation::recut_due): the whole state to opt.recut; returns
-  // {"recut": true} instead of a summary (run_case goes on with the new parts).
-  nlohmann::json recut();
+  // The simulation's part of it (and over several processes the cuts' and the balance's).
+  bool save_simulation_state(StateArrays& st, std::vector<RowPart>* rows) const;
+  // The parts are to be cut anew (Simulation::recut_due): the whole state to cuts_->state; the
+  // run over processes goes on with the new parts.
+  LoopEnd recut();
   void check_recut(const StateArrays& given);
-  nlohmann::json interrupted();
+  // Whether this run loop's parts began at a cut (their state is the cut's, not a checkpoint's).
+  bool began_at_cut() const { return restart_ && restart_ == &cuts_->state; }
+  LoopEnd interrupted();
   // The signal that asks the run to stop (0: none); over several processes the same on each.
   int interrupt_signal() const;
   static constexpr long kInterruptPoll = 64;
@@ -68,10 +106,12 @@ class RunLoop {
   const RunOptions& opt_;
   const RunIdentity id_;
   const StateArrays* restart_;
+  CutHistory no_cuts_;      // (one process: none)
+  CutHistory* const cuts_;  // the run over processes' cuts, or no_cuts_
   const Clock::time_point wall0_;
   Clock::time_point loop0_;
-  // A part that began at a cut (the restart state is opt.recut): its set-up's wall time, from the
-  // construction to the loop's start (a share of the cut's time; 0 otherwise).
+  // A part that began at a cut (began_at_cut()): its set-up's wall time, from the construction to
+  // the loop's start (a share of the cut's time; 0 otherwise).
   double cut_setup_seconds() const;
   Simulation<D> sim_;
   const int boundary_nodes_;  // before contact adds crack faces to the platens' nodes
@@ -84,7 +124,7 @@ class RunLoop {
   double prior_wall_ = 0, prior_loop_wall_ = 0, ckpt_wall_ = 0;
   long ckpt_written_ = 0;
   int signal_ = 0;  // the signal that stopped the run (0: none)
-  bool writes_ = true;  // this process writes the outputs (process 0 of a run over several)
+  bool writes_ = true;  // this process writes the outputs (Parts::root: process 0 of several)
   long whole_ifaces_ = 0;  // the whole mesh's interfaces
   // the pace of the loop: at each tenth of the end time that this loop crosses, the step and the
   // loop's wall seconds so far (summary.json "pace": how the step rate changes as a run fragments,
@@ -102,10 +142,11 @@ class RunLoop {
   void mark_pace();
 };
 
-// run_case's run of a prepared case in dimension D.
+// run_case's run of a prepared case in dimension D (the arguments: RunLoop's).
 template <int D>
-nlohmann::json run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                       const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr);
+LoopEnd run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
+                const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr,
+                CutHistory* cuts = nullptr);
 
 extern template class RunLoop<2>;
 extern template class RunLoop<3>;

@@ -112,7 +112,7 @@ void RunFragments<D>::open_csv(const RunState* restart, const std::string& file,
 template <int D>
 RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out,
                               bool writes, const RunState* restart, const std::string& file)
-    : comm_(sim.comm()), out_(out) {
+    : comm_(&sim.parts().comm()), out_(out) {
   open_csv(restart, file, writes);
   if (!writes) return;
   // the whole mesh's elements, masses and interfaces (the arrays the labelling reads)
@@ -125,7 +125,7 @@ RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const Hos
   const MaterialTable mats = build_materials<D>(c, whole, w);
   build_elements<D>(c, whole, mats, w);
   w.iface = Kokkos::View<int* [2 * D]>("fdem::fragments::iface", w.ni);
-  w.ihist = Kokkos::View<double* [D][4]>("fdem::fragments::ihist", w.ni);
+  w.ihist = Kokkos::View<double* [D][kPointHistory]>("fdem::fragments::ihist", w.ni);
   // reference positions: the per-body statistics (several initial bodies) place the fragments
   w.X = Kokkos::View<double* [D]>("fdem::fragments::X", w.nn);
   auto Xh = Kokkos::create_mirror_view(w.X);
@@ -144,20 +144,20 @@ RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const Hos
 // process 0.
 template <int D>
 void RunFragments<D>::gather_histories(const Simulation<D>& sim) {
-  const size_t own = static_cast<size_t>(sim.m.owned_ifaces()), w = 4 * D;
+  const size_t own = static_cast<size_t>(sim.m.owned_ifaces()), w = kPointHistory * D;
   auto h = Kokkos::create_mirror_view(sim.m.ihist);
   Kokkos::deep_copy(h, sim.m.ihist);
   std::vector<double> rows(own * w);
   for (size_t q = 0; q < own; ++q)
     for (int k = 0; k < D; ++k)
-      for (int a = 0; a < 4; ++a) rows[q * w + 4 * k + a] = h(q, k, a);
+      for (int a = 0; a < kPointHistory; ++a) rows[q * w + kPointHistory * k + a] = h(q, k, a);
   const std::vector<double> all =
       gather_rows(*comm_, rows.data(), own, w, sim.ifaces_global(), whole_ ? static_cast<size_t>(whole_->ni) : 0);
   if (!whole_) return;
   auto wh = Kokkos::create_mirror_view(whole_->ihist);
   for (int q = 0; q < whole_->ni; ++q)
     for (int k = 0; k < D; ++k)
-      for (int a = 0; a < 4; ++a) wh(q, k, a) = all[q * w + 4 * k + a];
+      for (int a = 0; a < kPointHistory; ++a) wh(q, k, a) = all[q * w + kPointHistory * k + a];
   Kokkos::deep_copy(whole_->ihist, wh);
 }
 
@@ -265,10 +265,9 @@ template <int D>
 bool RunSnapshots<D>::parallel(const Simulation<D>& sim) {
   if (parallel_ >= 0) return parallel_ == 1;
   parallel_ = 0;
-  const Comm* comm = sim.comm();
-  if (!comm) return false;
+  if (!sim.parts().many()) return false;
   if (gather_outputs()) return false;
-  const long long fapl = comm->h5_parallel_access();  // (collective)
+  const long long fapl = sim.parts().comm().h5_parallel_access();  // (collective)
   if (fapl < 0) return false;
   frames_ = std::make_unique<ParallelFrames>(fapl);
   parallel_ = 1;

@@ -58,7 +58,7 @@ class RunFragments {
   // `file` when its rows do not fit the columns.
   RunFragments(const Model<D>& m, const std::string& out, const RunState* restart = nullptr,
                const std::string& file = "");
-  // A run over several processes (sim.comm()): `whole` is the whole mesh. Process 0 (`writes`)
+  // A run over several processes (sim.parts().many()): `whole` is the whole mesh. Process 0 (`writes`)
   // keeps the whole mesh's elements and interfaces and labels its fragments from every process's
   // interface histories, gathered at each call below (which every process makes, at the same
   // steps); the others only send theirs. restart: as above.

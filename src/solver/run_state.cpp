@@ -14,7 +14,7 @@ void RunState::fields(Self& s, F&& f, long long platens) {
   f("run/peak_load", s.peak_load, platens);
   f("run/peak_displacement", s.peak_displacement, platens);
   f("run/max_relative_balance_error", s.max_relative_balance_error, 1);
-  f("run/last_row_energies", s.last_row_energies, kEnergyFieldCount);
+  f("run/last_row_energies", s.last_row_energies, -1);  // (the ledger's layout: solver/ledger.hpp)
   f("run/last_was_row", s.last_was_row, 1);
   f("run/last_snapshot_step", s.last_snapshot_step, 1);
   f("run/history_rows", s.history_rows, -1);
@@ -62,6 +62,19 @@ void RunState::load(const StateArrays& s, int platens) {
   fields(*this, Reader{s}, platens);
   if (s.has("run/load_samples")) load_samples = s.array("run/load_samples");
   if (s.has("run/balance_warning")) balance_warning = s.array("run/balance_warning", 3);
+}
+
+void CutHistory::save(StateArrays& s) const {
+  s.put_int("processes/contact_recuts", recuts);  // (how a restart cuts its parts: solver/run.cpp)
+  s.put_int("processes/rebalances", rebalances);
+  s.put_int("processes/elements_moved", elements_moved);
+  if (!cut_parts.empty()) s.i64["processes/cut_parts"].assign(cut_parts.begin(), cut_parts.end());
+}
+
+void CutHistory::load(const StateArrays& s) {
+  if (s.has("processes/contact_recuts")) recuts = static_cast<int>(s.get_int("processes/contact_recuts"));
+  if (s.has("processes/rebalances")) rebalances = static_cast<int>(s.get_int("processes/rebalances"));
+  if (s.has("processes/elements_moved")) elements_moved = s.get_int("processes/elements_moved");
 }
 
 }  // namespace fdem

@@ -69,16 +69,12 @@ nlohmann::json phases_report(const PhaseTimes& p) {
 namespace {
 
 nlohmann::json energy_report(const Energies& e, double max_rel_error) {
-  return {{"kinetic_J", e.kinetic},
-          {"strain_J", e.strain},
-          {"interface_elastic_J", e.interface_elastic},
-          {"contact_elastic_J", e.contact_elastic},
-          {"fracture_J", e.fracture},
-          {"damping_J", e.damping},
-          {"friction_J", e.friction},
-          {"external_work_J", e.work_external},
-          {"balance_error_J", e.balance_error},
-          {"max_relative_balance_error", max_rel_error}};
+  nlohmann::json r;
+  const auto& terms = energy_terms();  // the ledger's (solver/ledger.hpp)
+  for (size_t i = 0; i < terms.size(); ++i) r[std::string(terms[i].key) + "_J"] = term_value(e, i);
+  r["balance_error_J"] = e.balance_error;
+  r["max_relative_balance_error"] = max_rel_error;
+  return r;
 }
 
 template <int D>
@@ -121,8 +117,7 @@ nlohmann::json checkpoint_report(const RunRecord& r) {
 
 template <int D>
 nlohmann::json contact_report(ContactSystem<D>& ct, const Simulation<D>& sim) {
-  const Comm* comm = sim.comm();
-  if (!comm)
+  if (!sim.parts().many())  // one process: its own counts (the summary's keys differ)
     return {{"interfaces_handed_over", ct.handed_over()},
             {"surface_nodes", ct.surface_nodes()},
             {"candidate_pairs", ct.candidates()},
@@ -134,15 +129,16 @@ nlohmann::json contact_report(ContactSystem<D>& ct, const Simulation<D>& sim) {
   // by its owner (interfaces handed over: the counted ones; surface nodes and contacts: the own
   // nodes'), and per process what each holds (candidate pairs, its own and its ghosts') and did.
   const long handed = count_handed(sim.m.icontact, sim.m.owned_ifaces());
-  const int n = comm->size();
+  const Parts<D>& parts = sim.parts();
+  const int n = parts.size();
   const std::vector<double> mine = {static_cast<double>(handed), static_cast<double>(ct.own_surface_nodes()),
                                     static_cast<double>(ct.active_contacts()), static_cast<double>(ct.candidates()),
                                     static_cast<double>(ct.builds()), static_cast<double>(ct.list_updates())};
   std::vector<double> all(mine.size() * n, 0.0), sum(mine.size(), 0.0);
   for (size_t i = 0; i < mine.size(); ++i) {  // (every process gets every value: sums of one-hot rows)
     std::vector<double> row(n, 0.0);
-    row[comm->rank()] = mine[i];
-    comm->sum(row.data(), n);
+    row[parts.rank()] = mine[i];
+    parts.sum(row.data(), n);
     for (int p = 0; p < n; ++p) {
       all[i * n + p] = row[p];
       sum[i] += row[p];
@@ -211,6 +207,62 @@ template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulati
                                     const HistoryTable<2>&, RunFragments<2>*, const RunRecord&);
 template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<3>&,
                                     const HistoryTable<3>&, RunFragments<3>*, const RunRecord&);
+
+template <int D>
+nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const CutHistory& cuts,
+                                std::chrono::steady_clock::time_point loop_start, double cut_setup) {
+  const Comm& comm = sim.parts().comm();
+  double bytes[2] = {static_cast<double>(sim.exchange_bytes()), sim.phase_times().exchange};
+  double most[2] = {-bytes[0], -bytes[1]};
+  comm.sum(bytes, 2);
+  comm.min(most, 2);
+  std::vector<double> peaks, busy;  // every process's peak resident memory, on process 0
+  comm.gather({setup_times::peak_rss_bytes()}, peaks);
+  // the loop's time outside the exchange (which includes the waits for the others), every cut's
+  // parts included: the measured balance
+  const double loop_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
+  const double busy_here = cuts.busy_seconds + loop_seconds - sim.phase_times().exchange;
+  comm.gather(std::vector<double>{busy_here}, busy);
+  const double cut_seconds = cuts.cut_seconds + cut_setup;
+  const auto& b = sim.balance();
+  std::vector<double> after = cuts.excess_after_cuts;
+  if (b.after_cut >= 0) after.push_back(b.after_cut);
+  nlohmann::json p = {{"count", comm.size()},
+                      {"contact_recuts", cuts.recuts},
+                      {"rebalances", cuts.rebalances},
+                      {"cut_reasons", cuts.cut_reasons},
+                      {"elements_moved", cuts.elements_moved},
+                      {"elements_moved_at_cuts", cuts.elements_moved_at_cuts},
+                      {"cut_seconds", cut_seconds},
+                      {"exchange_bytes_per_step", bytes[0]},
+                      {"exchange_bytes_per_step_most", -most[0]},
+                      {"exchange_seconds_most", -most[1]},
+                      {"gpu_aware_mpi", comm.gpu_aware()},
+                      {"peak_rss_bytes", peaks},
+                      {"busy_seconds", busy}};
+  // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
+  if (b.after_cut >= 0) {
+    p["rebalance_above"] = c.rebalance_above;
+    const WorkModel& wm = c.work_model;
+    p["work_model_ns"] = {{"element", wm.element},
+                          {"interface", wm.interface},
+                          {"node", wm.node},
+                          {"contact_unit", wm.contact_unit}};
+    p["work_excess"] = b.excess;
+    p["work_excess_largest"] = std::max(b.largest, cuts.excess_largest);
+    p["work_excess_at_rebalances"] = cuts.excess_at_rebalances;
+    p["work_excess_after_cuts"] = after;
+    p["work_ns_per_step_most"] = b.work_most;
+    p["work_ns_per_step_mean"] = b.work_mean;
+  }
+  return p;
+}
+
+template nlohmann::json processes_report(const Case&, const Simulation<2>&, const CutHistory&,
+                                         std::chrono::steady_clock::time_point, double);
+template nlohmann::json processes_report(const Case&, const Simulation<3>&, const CutHistory&,
+                                         std::chrono::steady_clock::time_point, double);
 
 void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress) {
   if (progress) {

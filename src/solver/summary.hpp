@@ -1,5 +1,6 @@
 #pragma once
 // summary.json of a run, and the reports `fdem check` shares with it.
+#include <chrono>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include "mesh/mesh.hpp"
 #include "solver/history_table.hpp"
 #include "solver/run_output.hpp"
+#include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
 
 namespace fdem {
@@ -43,6 +45,15 @@ struct RunRecord {
 template <int D>
 nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulation<D>& sim,
                            const HistoryTable<D>& history, RunFragments<D>* frag, const RunRecord& r);
+
+// summary.json "processes" of a run over several processes (collective: every process calls it, at
+// the end of the run): the processes' exchange, memory and measured balance (each one's time in the
+// loop since loop_start outside the exchange, with that of the parts before the last cut), the cuts
+// of the parts anew (cuts; cut_setup: the set-up of the parts that end, when they began at a cut)
+// and, once the balance was checked, the work model and the excesses.
+template <int D>
+nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const CutHistory& cuts,
+                                std::chrono::steady_clock::time_point loop_start, double cut_setup);
 
 // The closing lines: steps and throughput on stderr (with progress on), where the results are
 // on stdout.
