@@ -56,8 +56,8 @@ inline constexpr char kContactSyncLabel[] = "fdem::contact::sync";
 
 // Steps between two polls of the handover flag (failed interfaces handed over to contact; on these
 // steps the processes of a decomposed run also check their contact zones). The zone-safety check
-// in src/solver/simulation_parallel.cpp (Simulation::agree_on_contact: a node may move 2 v dt per
-// step for this many steps until the next check) depends on it.
+// in src/solver/cut_checks.cpp (CutChecks::check: a node may move 2 v dt per step for this many
+// steps until the next check) depends on it.
 inline constexpr int kContactPollEvery = 25;
 
 // The contact law's penetration depth (ContactLaw::dpen; also the contact zone's reach in
@@ -120,7 +120,7 @@ class ContactSystem {
   int candidates() const { return cur_.size; }
   // The narrow phase's work of this process's own surface points, in its units (kPointWork per
   // point plus the point's candidates; kernels/contact/narrow_phase.hpp), for the balance of a run
-  // over processes (Simulation::agree_on_contact): the sum, and with a non-empty `w` also added per
+  // over processes (CutChecks::modelled_work, solver/cut_checks.hpp): the sum, and with a non-empty `w` also added per
   // node, w(node) += units * scale. 0 while no surfaces can meet (no narrow phase runs).
   double own_point_work(const Kokkos::View<double*>& w = {}, double scale = 1.0) const;
   int active_contacts() const;  // in the last pass (reads the device status)

@@ -66,8 +66,7 @@ template <int D>
 void HistoryTable<D>::add_columns(const Simulation<D>& sim, const HostMesh& mesh, const HostMesh* part) {
   cols_ = {"time [s]", "step"};
   sim.platens().add_columns(cols_);
-  for (const auto& name : sim.bc_names())
-    for (int k = 0; k < D; ++k) cols_.push_back(name + "_reaction_" + kAxes[k] + " [N]");
+  sim.loads().add_columns(cols_);
   for (const auto& name : c_.monitors) {
     monitor_count_.push_back(part ? part->whole_set_size.at(name) : static_cast<long>(mesh.node_sets.at(name).size()));
     const auto& nodes = (part ? *part : mesh).node_sets.at(name);
@@ -98,8 +97,7 @@ template <int D>
 std::vector<double> HistoryTable<D>::make_row(const Simulation<D>& sim) {
   std::vector<double> row = {last_.time, static_cast<double>(last_.step)};
   sim.platens().append_row(sim.m, sim.platen_forces(), last_.time, row);
-  for (const auto& r : sim.reactions())
-    for (int k = 0; k < D; ++k) row.push_back(r[k]);
+  sim.loads().append_row(row);
   for (size_t i = 0; i < monitor_nodes_.size(); ++i) {
     double u[3];
     node_list_displacement<D>(sim.m, monitor_nodes_[i], u);

@@ -29,13 +29,17 @@ struct Energies {
 
 enum class EnergySide { stored, dissipated, work };
 
+// A built-in term's member of Energies. An alias, not a spelled-out `double Energies::*field`:
+// nvcc's front end writes that as `double (Energies::*field)`, on which g++ 12 warns (-Wparentheses).
+using EnergyField = double Energies::*;
+
 struct EnergyTerm {
   const char* key;     // summary.json's "energy" key (with "_J") and the checkpoint's order
   const char* column;  // history.csv
   EnergySide side;
   bool summed;         // each process holds its own share: summed over the processes
   const char* where;   // where it is accumulated (for the reader; docs/developing.md)
-  double Energies::*field = nullptr;  // a built-in term's value; null: an added one
+  EnergyField field = nullptr;  // a built-in term's value; null: an added one
   // an added term: its value at a sampled instant (time, step), the same on every process
   std::function<double(double, long)> sample = {};
 };

@@ -316,20 +316,13 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   Phase interfaces("model_interfaces");
   sc.interfaces = build_interfaces<D>(c, mesh, el.mass, m);
   coh0_ = m.coh;
-  rebalance_above_ = c.rebalance_above;
-  work_model_ = c.work_model;
+  cuts_.configure(c.rebalance_above, c.work_model);
   build_interface_chunks<D>(mesh, m);
   interfaces.stop();
 
   platens_.build(c, mesh, el.mass, m, sc);
 
-  const VelocityBCTable bcs = build_velocity_bcs<D>(c, mesh, m);
-  bc_names_ = bcs.names;
-  bc_nodes_ = bcs.nodes;
-  reactions_.assign(bc_nodes_.size(), {0, 0, 0});
-
-  const std::vector<double> load_ramps = build_point_loads<D>(c, mesh, m);
-  set_initial_velocities<D>(c, mesh, bcs, m);
+  loads_.build(c, mesh, m, prm_);
 
   if (contact_wanted(c, mesh)) {
     Phase contact("contact_setup");
@@ -342,7 +335,6 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     platens_.contact_step(m, contact_->potential_area(), el.mass, sc);
     platens_.follow_surfaces(m, *contact_, t);
     sc.may_meet = contact_->may_meet();
-    agree_on_meeting();
   }
   force_pass_contributes_ = parts_.force_pass_contributes(contact_ != nullptr);
 
@@ -355,10 +347,6 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
 
   prm_.alpha = c.local_damping;
   prm_.cmass = c.mass_damping;
-  for (int k = 0; k < 3; ++k) prm_.gravity[k] = c.gravity[k];
-  prm_.has_fext = m.fext.extent(0) > 0;
-  prm_.load_ramps = static_cast<int>(load_ramps.size());
-  for (size_t g = 0; g < load_ramps.size(); ++g) prm_.load_ramp[g] = load_ramps[g];
   scatter_ = ForceScatter<D>(m.f);
 }
 

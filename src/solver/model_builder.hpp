@@ -4,7 +4,7 @@
 // velocity-BC table, point loads and initial velocities (the platens build themselves:
 // solver/platens.hpp). The Simulation constructor (model_builder.cpp) calls them in this order,
 // then creates the contact system and decides the time step (solver/stable_step.hpp);
-// model_builder_loads.cpp holds the steps from the velocity BCs on. Each step that finds a
+// solver/loads.cpp holds the steps from the velocity BCs on. Each step that finds a
 // contribution to the stable step returns it.
 #include <cmath>
 #include <string>

@@ -63,31 +63,23 @@ void Simulation<D>::step(bool sample) {
     parts_.return_ghost_forces(m, phase_times_.exchange);
     if (contact_->polled()) agree_on_contact();
     if (platens_.surfaces_changed(*contact_)) platens_.follow_surfaces(m, *contact_, t);
-    if (stable.contact_pending && contact_meet_) apply_contact_step();
+    if (stable.contact_pending && surfaces_may_meet()) apply_contact_step();
     lap(phase_times_.contact);
   }
-  if (sample_reactions_) sample_reactions();
+  if (sample_reactions_) loads_.sample_reactions(m, parts_);  // (from this step's forces)
   Energies e = sample_energies(sample);
   lap(phase_times_.ledger);
   const NodeSums w = update_nodes_now(sample);
   lap(phase_times_.nodes);
-  parts_.exchange_ghosts(m, phase_times_.exchange);
   book_energies(e, w, sample);
   t += dt;
   ++step_count;
   lap(phase_times_.ledger);
+  // the ghosts take their owners' new positions (one process: nothing); timed as `exchange` on
+  // every step, apart from the phases above
+  parts_.exchange_ghosts(m, phase_times_.exchange);
   ++phase_times_.steps;
   if (timed) ++phase_times_.timed;
-}
-
-template <int D>
-void Simulation<D>::sample_reactions() {
-  for (size_t b = 0; b < bc_nodes_.size(); ++b) {
-    double s[3] = {0, 0, 0};
-    node_list_force<D>(m, bc_nodes_[b], s);
-    parts_.sum(s, 3);
-    for (int k = 0; k < 3; ++k) reactions_[b][k] = -s[k];
-  }
 }
 
 template <int D>
@@ -404,7 +396,6 @@ void Simulation<D>::load_state(const StateArrays& s) {
   if (contact_) {
     contact_->load_state(s, m, parts_.node_global());
     platens_.follow_surfaces(m, *contact_, t);
-    agree_on_meeting();
     contact_->law.mu = mu0_ / srf_;
     contact_->law.srf = srf_;
   }

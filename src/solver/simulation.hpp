@@ -21,7 +21,9 @@
 #include "parallel/decompose.hpp"
 #include "parallel/parts.hpp"
 #include "solver/contact_system.hpp"
+#include "solver/cut_checks.hpp"
 #include "solver/ledger.hpp"
+#include "solver/loads.hpp"
 #include "solver/platens.hpp"
 #include "solver/stable_step.hpp"
 
@@ -121,7 +123,7 @@ class Simulation {
   double platen_displacement(int p, double at) const { return Platens<D>::displacement(m.platens.p[p], at); }
   // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
   // forces of the last step (call before step() clears them: use sample_reactions()).
-  const std::vector<std::array<double, 3>>& reactions() const { return reactions_; }
+  const std::vector<std::array<double, 3>>& reactions() const { return loads_.reactions(); }
   void set_sample_reactions(bool on) { sample_reactions_ = on; }
 
   // Host copies for snapshots. Over several processes (set_decomposition) every process must call
@@ -182,7 +184,9 @@ class Simulation {
   void load_state_whole(const StateArrays& whole);
 
   const std::vector<std::string>& platen_names() const { return platens_.names(); }
-  const std::vector<std::string>& bc_names() const { return bc_names_; }
+  const std::vector<std::string>& bc_names() const { return loads_.names(); }
+  // Boundary conditions and loads (solver/loads.hpp).
+  const Loads<D>& loads() const { return loads_; }
 
  private:
   ForceScatter<D> scatter_;
@@ -199,38 +203,28 @@ class Simulation {
   // failed interfaces, with the check that no node has moved so far that the zones no longer hold
   // every face a contact may need. Called by step() on the poll steps of a run over processes.
   void agree_on_contact();
-  // contact_meet_ from every process's contact system (collective; one process: its own).
+  // contact_meet_ from every process's contact system (collective).
   void agree_on_meeting();
-  // Over several processes with contact: the nodes have moved so far from where the parts were cut
-  // that the contact zones may soon miss a face; the run loop then cuts the parts anew at the
-  // current positions (solver/run.cpp), set on the same step on every process.
-  bool recut_due() const { return recut_due_; }
-  // The balance of a run over processes with contact (docs/parallel.md "Rebalancing"), checked on
-  // the same poll steps: each process's modelled work of a step (WorkModel: its bulk elements,
-  // interfaces, own nodes and the narrow phase's work of its own surface points), and how far the
-  // largest exceeds the mean (max / mean - 1). When that excess passes the case's
-  // parallel.rebalance_above and twice the excess at the first check after the last cut, the
-  // parts are cut anew (recut_due(), with recut_reason() "work"), weighted by the work.
-  struct Balance {
-    double excess = 0;      // at the last check
-    double after_cut = -1;  // at the first check after the last cut (or the start); -1: none yet
-    double largest = 0;     // the largest seen
-    double work_most = 0, work_mean = 0;  // ns per step, at the last check
-  };
-  // Why the parts are to be cut anew: "work" (the balance), "zones" (the contact zones' check) or
-  // "test" (the test hook FDEM_TEST_RECUT); the first of them on the step it was asked.
-  const char* recut_reason() const { return recut_reason_; }
-  const Balance& balance() const { return balance_; }
-  void restore_balance(const std::vector<double>& after_cut_largest) {  // (a checkpoint's: RunLoop)
-    balance_.after_cut = after_cut_largest.at(0);
-    balance_.largest = after_cut_largest.at(1);
-  }
+  // Whether surfaces can meet anywhere (contact's stable step then applies): over several
+  // processes as agreed on the last poll step, so that every process changes its step on the same
+  // step; on one process its contact system's word, at once.
+  bool surfaces_may_meet() const { return parts_.many() ? contact_meet_ : contact_->may_meet(); }
+  // Over several processes with contact: whether the parts are to be cut anew, why, and the
+  // balance, checked on contact's poll steps (solver/cut_checks.hpp); the run loop then cuts them
+  // anew at the current positions (solver/run.cpp).
+  using Balance = typename CutChecks<D>::Balance;
+  bool recut_due() const { return cuts_.due(); }
+  const char* recut_reason() const { return cuts_.reason(); }
+  const Balance& balance() const { return cuts_.balance(); }
+  void restore_balance(const std::vector<double>& after_cut_largest) { cuts_.restore_balance(after_cut_largest); }
   // This process's modelled work of a step (ns; WorkModel); with a non-empty `node_work` (m.nn
   // entries) the own surface points' contact work is also added there per node.
-  double modelled_work(const Kokkos::View<double*>& node_work = {}) const;
+  double modelled_work(const Kokkos::View<double*>& node_work = {}) const {
+    return cuts_.modelled_work(m, contact_.get(), node_work);
+  }
   // Over several processes (collective, at a cut): each node's contact work (ns per step) in the
   // whole mesh's order, on process 0 (empty elsewhere): the weights of the next cut.
-  std::vector<double> node_work_whole() const;
+  std::vector<double> node_work_whole() const { return cuts_.node_work_whole(m, contact_.get(), parts_); }
   // Over several processes (collective): the mass and momentum summed over every process's own
   // nodes, and the sum of m |v_k| (the scale of the momentum's round-off): 5 values (a 2D run's
   // third momentum component 0).
@@ -253,17 +247,7 @@ class Simulation {
   void load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const;
   std::vector<double> decomposition_print() const;
   bool contact_meet_ = false;
-  double zone_reach_ = 0;  // SubMesh::contact_reach
-  Kokkos::View<double* [D]> xcut_;  // the own nodes' positions where the parts were cut (SubMesh::cut_x)
-  bool recut_due_ = false;
-  const char* recut_reason_ = "";
-  double rebalance_above_ = 0.2;  // Case::rebalance_above
-  WorkModel work_model_;           // Case::work_model
-  Balance balance_;
-  // Test hook (tests/mpi/check_runs.py): the environment variable FDEM_TEST_RECUT=N cuts the parts
-  // anew every N steps (at the next zone check), each time with the parts' ids rotated, so that
-  // every element, node and history moves to another process (solver/run.cpp).
-  long test_recut_every_ = 0, next_test_cut_ = -1;
+  CutChecks<D> cuts_;  // over several processes with contact: when to cut the parts anew
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)
   double mu0_ = 0;         // contact friction coefficient as given
   double srf_ = 1;         // strength reduction factor now
@@ -278,10 +262,8 @@ class Simulation {
   StepContributions step_sources_;  // what the stable step is decided from (solver/stable_step.hpp)
   void take_contact_step();   // dt and the stable-step estimates become those with contact
   void apply_contact_step();  // the same during a run (the velocity step of the change)
-  // The ledger of step(): reactions of the velocity BCs from this step's forces; the energies
-  // stored at time t (sample: else only time and step); after the node update, the works and the
-  // balance (sample) and the work accumulators.
-  void sample_reactions();
+  // The ledger of step(): the energies stored at time t (sample: else only time and step); after
+  // the node update, the works and the balance (sample).
   Energies sample_energies(bool sample);
   void book_energies(Energies& e, const NodeSums& w, bool sample);
   // The checkpoint entries under "simulation/" and "model/", one list walked by save_state
@@ -302,9 +284,7 @@ class Simulation {
   double energy_floor_ = 0;  // energies below this are round-off (strain energy at strain 1e-6)
   Energies energies_;
   PhaseTimes phase_times_;
-  std::vector<std::string> bc_names_;
-  std::vector<Kokkos::View<int*>> bc_nodes_;
-  std::vector<std::array<double, 3>> reactions_;
+  Loads<D> loads_;
   bool sample_reactions_ = false;
 };
 

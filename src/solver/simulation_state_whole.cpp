@@ -122,7 +122,7 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
   if (contact_) {
     save_contact_whole(local, whole);
     // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
-    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), xcut_);
+    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), cuts_.cut_positions());
     std::vector<double> own(xc.extent(0) * D);
     for (size_t i = 0; i < xc.extent(0); ++i)
       for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);

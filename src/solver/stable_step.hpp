@@ -42,7 +42,10 @@ struct StepContributions {
 // The contributions that are the smallest over the items, in one list: the parts of a decomposed
 // run take the smallest of each over the parts (smallest(); over processes
 // Simulation::set_decomposition), so a new contribution listed here is reduced everywhere.
-inline constexpr double StepContributions::*kSmallestOverParts[] = {
+// (An alias, as EnergyField in src/solver/ledger.hpp: nvcc's front end writes a spelled-out
+// pointer to member with parentheses, on which g++ 12 warns.)
+using StepField = double StepContributions::*;
+inline constexpr StepField kSmallestOverParts[] = {
     &StepContributions::bulk, &StepContributions::interfaces, &StepContributions::platens,
     &StepContributions::contact, &StepContributions::platens_on_surfaces};
 inline constexpr int kSmallestOverPartsCount =

@@ -1,5 +1,6 @@
-// Building the model, continued (solver/model_builder.hpp): the velocity-BC table, point loads and
-// initial velocities (the platens' build: solver/platens.cpp).
+// Boundary conditions and loads (solver/loads.hpp): the velocity-BC table, point loads, initial
+// velocities (build steps declared in solver/model_builder.hpp), the reactions and their history
+// columns.
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,8 @@
 
 #include "common/error.hpp"
 #include "kernels/nodes.hpp"
+#include "kernels/outputs.hpp"
+#include "solver/loads.hpp"
 #include "solver/model_builder.hpp"
 
 namespace fdem {
@@ -141,6 +144,49 @@ void set_initial_velocities(const Case& c, const HostMesh& mesh, const VelocityB
   }
   Kokkos::deep_copy(m.v, v_h);
 }
+
+namespace {
+constexpr const char* kAxes[] = {"x", "y", "z"};
+}  // namespace
+
+template <int D>
+void Loads<D>::build(const Case& c, const HostMesh& mesh, Model<D>& m, NodeUpdateParams& prm) {
+  const VelocityBCTable bcs = build_velocity_bcs<D>(c, mesh, m);
+  names_ = bcs.names;
+  nodes_ = bcs.nodes;
+  reactions_.assign(nodes_.size(), {0, 0, 0});
+  const std::vector<double> load_ramps = build_point_loads<D>(c, mesh, m);
+  set_initial_velocities<D>(c, mesh, bcs, m);
+  for (int k = 0; k < 3; ++k) prm.gravity[k] = c.gravity[k];
+  prm.has_fext = m.fext.extent(0) > 0;
+  prm.load_ramps = static_cast<int>(load_ramps.size());
+  for (size_t g = 0; g < load_ramps.size(); ++g) prm.load_ramp[g] = load_ramps[g];
+}
+
+template <int D>
+void Loads<D>::sample_reactions(const Model<D>& m, const Parts<D>& parts) {
+  for (size_t b = 0; b < nodes_.size(); ++b) {
+    double s[3] = {0, 0, 0};
+    node_list_force<D>(m, nodes_[b], s);
+    parts.sum(s, 3);
+    for (int k = 0; k < 3; ++k) reactions_[b][k] = -s[k];
+  }
+}
+
+template <int D>
+void Loads<D>::add_columns(std::vector<std::string>& cols) const {
+  for (const auto& name : names_)
+    for (int k = 0; k < D; ++k) cols.push_back(name + "_reaction_" + kAxes[k] + " [N]");
+}
+
+template <int D>
+void Loads<D>::append_row(std::vector<double>& row) const {
+  for (const auto& r : reactions_)
+    for (int k = 0; k < D; ++k) row.push_back(r[k]);
+}
+
+template class Loads<2>;
+template class Loads<3>;
 
 #define FDEM_BUILDERS(D)                                                                                     \
   template VelocityBCTable build_velocity_bcs<D>(const Case&, const HostMesh&, Model<D>&);                  \
