@@ -1,0 +1,338 @@
+// A run over several processes (docs/parallel.md): process 0 meshes the case, partitions and
+// decomposes it and sends each process its part; every process runs its part; with contact the
+// parts are cut anew when a run loop asks for it, and the next run loop goes on from the whole
+// state on the new parts (ProcessesRun and its phases). One concern, so one file.
+#include "solver/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <numeric>
+
+#include "common/error.hpp"
+#include "common/setup_times.hpp"
+#include "io/case.hpp"
+#include "io/checkpoint.hpp"
+#include "io/output.hpp"
+#include "mesh/memory_budget.hpp"
+#include "mesh/mesh.hpp"
+#include "parallel/comm.hpp"
+#include "parallel/decompose.hpp"
+#include "parallel/partition.hpp"
+#include "solver/homogenise.hpp"
+#include "solver/interface_materials.hpp"
+#include "solver/run_loop.hpp"
+#include "solver/run_state.hpp"
+#include "solver/simulation.hpp"
+#include "solver/summary.hpp"
+
+#include "solver/run_setup.hpp"
+
+namespace fdem {
+
+namespace {
+
+// The measurement switch FDEM_CUT_METHOD (docs/parallel.md, "Rebalancing"): "rcb" (or unset), the
+// cut by Zoltan's RCB; "metis", by METIS's graph of the interfaces not handed over to contact.
+bool cut_by_graph() {
+  const char* m = std::getenv("FDEM_CUT_METHOD");
+  if (!m || !*m || std::string(m) == "rcb") return false;
+  if (std::string(m) == "metis") return true;
+  throw InputError("FDEM_CUT_METHOD='" + std::string(m) + "': give rcb or metis (unset: rcb)");
+}
+
+// Process 0 at a restart: every row of an entry per node left in the checkpoint (StateArrays::by_rows),
+// verified against its stored checksum, into `s`.
+void whole_rows_of(StateArrays& s, const std::string& name, const HostMesh& mesh) {
+  const int nn = mesh.num_nodes();
+  std::vector<int> all(static_cast<size_t>(nn));
+  std::iota(all.begin(), all.end(), 0);
+  uint64_t hash = 0;
+  std::vector<double> v = read_rows(s, name, all, all.size(), all.size(), 1, nn, mesh.dim, hash);
+  if (!rows_checksum_matches(s, name, hash))
+    throw InputError("restart file '" + s.file + "' is damaged: dataset '" + name + "' fails its checksum");
+  s.f64[name] = std::move(v);
+}
+
+// Every process's part of `mesh` (decompose), packed for sending.
+std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vector<int>& elem_part, int parts,
+                                            double reach, const std::vector<double>* at) {
+  std::vector<SubMesh> all = decompose(mesh, elem_part, parts, reach, at);
+  std::vector<std::vector<char>> out;
+  for (SubMesh& s : all) {
+    out.push_back(pack_submesh(s));
+    s = SubMesh{};  // packed: freed
+  }
+  return out;
+}
+
+// A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
+// refused, naming the key. Process 0 meshes the case, partitions and decomposes it and sends each
+// process its part (the others never hold the whole mesh); every process runs its part; process 0
+// alone touches the output folder (every process reads a restart's checkpoint). With contact the
+// parts are cut anew when a run loop asks for it (RunLoop::run: LoopEnd::Kind::cut_due), and the
+// next run loop goes on from the whole state, on the new parts.
+class ProcessesRun {
+ public:
+  ProcessesRun(const std::string& case_path, Case& c, const RunOptions& opt)
+      : comm_(*opt.comm), root_(comm_.rank() == 0), c_(c), opt_(opt), prep_(prepare_run(case_path, c, opt)) {
+    opt_.progress = opt.progress && root_;
+  }
+  nlohmann::json run();
+
+ private:
+  void first_parts();
+  std::vector<int> restart_parts(const std::vector<double>& at, PartitionMethod bisection) const;
+  void send_first_parts();
+  void receive_part();
+  void hold_part_only();
+  void take_restart_cuts();
+  LoopEnd run_part();
+  void record_cut(const CutRequest& cut);
+  std::vector<std::vector<char>> cut_anew();
+  std::vector<int> parts_by_work(const std::vector<double>& x) const;
+  void send_cut(std::vector<std::vector<char>>& states);
+
+  const Comm& comm_;
+  const bool root_;
+  Case& c_;
+  RunOptions opt_;  // (the progress lines on process 0 only)
+  PreparedRun prep_;
+  double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
+  std::vector<std::vector<char>> packed_;  // process 0: every process's part, packed for sending
+  SubMesh part_;                           // this process's part
+  // process 0, with contact: the whole mesh, to cut the parts anew, and the contact zones' reach
+  std::unique_ptr<HostMesh> whole_;
+  double whole_reach_ = 0;
+  std::vector<int> elem_part_at_start_;  // process 0: the parts this run starts with
+  CutHistory cuts_;
+  const StateArrays* from_ = nullptr;  // the state the next parts start from (a checkpoint, a cut's)
+};
+
+nlohmann::json ProcessesRun::run() {
+  if (root_) first_parts();
+  // (an error on process 0 above ends every process: the others wait in the sending)
+  send_first_parts();
+  take_restart_cuts();
+  for (;;) {
+    LoopEnd end = run_part();
+    if (end.kind != LoopEnd::Kind::cut_due) return std::move(end.summary);
+    // Cutting the parts anew: the nodes have moved so far that a contact zone may soon miss a
+    // face, or the balance asks for it. Process 0 partitions the elements by coordinate bisection
+    // at the current positions (the parts follow where the material is now, so each zone stays a
+    // thin layer around a compact region; METIS's graph does not know where fragments have flown),
+    // decomposes the whole mesh with the zones at the current positions and sends each process its
+    // part and the whole state, which each takes its rows of, as from a checkpoint
+    // (Simulation::load_state_whole): elements, nodes, interface and contact histories move to
+    // their new owners.
+    const auto cut0 = std::chrono::steady_clock::now();
+    record_cut(end.cut);
+    std::vector<std::vector<char>> states;
+    if (root_) states = cut_anew();
+    send_cut(states);
+    cuts_.cut_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cut0).count();
+  }
+}
+
+// Process 0: the first parts, packed for sending. With contact each part holds the faces within its
+// contact zone (reach: the search distance, the contact law's penetration depth, ContactSystem::set_law,
+// and the skin, and contact.zone), and the whole mesh is kept for cutting the parts anew.
+void ProcessesRun::first_parts() {
+  const HostMesh& mesh = prep_.mesh;
+  const MeshQuality mq = mesh_quality(mesh);
+  mean_size_ = mq.mean_size;
+  setup_times::Phase phase("decomposition");
+  const double reach = contact_wanted(c_, mesh) ? contact_penetration_depth(mq.min_size, mq.mean_size) +
+                                                      c_.contact.skin + c_.contact.zone
+                                                : 0.0;
+  // METIS when the build has it, else coordinate bisection (Zoltan's RCB where the build has
+  // Zoltan, as every MPI build does; docs/parallel.md). A restart with contact cuts its parts
+  // where the run last cut them (the checkpoint's processes/cut_x), as the run did: coordinate
+  // bisection there after a cut during the run; so its zones hold as they did, and on as many
+  // processes the parts are the same (the run goes on to the bit)
+  const PartitionMethod bisection =
+      partition_has_zoltan() ? PartitionMethod::ZoltanRcb : PartitionMethod::Rcb;
+  const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis : bisection;
+  if (reach > 0) cut_by_graph();  // a bad FDEM_CUT_METHOD fails here, before the run
+  StateArrays& restart = prep_.restart;
+  if (reach > 0 && restart.by_rows.count("processes/cut_x")) whole_rows_of(restart, "processes/cut_x", mesh);
+  const bool resumed = reach > 0 && restart.f64.count("processes/cut_x");
+  const std::vector<double>* at =
+      resumed ? &restart.array("processes/cut_x", static_cast<long long>(mesh.X.size())) : nullptr;
+  std::vector<int> elem_part =
+      resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0
+          ? restart_parts(*at, bisection)
+          : partition_elements(mesh, comm_.size(), method);
+  packed_ = packed_parts(mesh, elem_part, comm_.size(), reach, at);
+  elem_part_at_start_ = std::move(elem_part);
+  if (reach > 0) {
+    whole_ = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
+    whole_reach_ = reach;
+  }
+}
+
+// Process 0 at a restart of a run that cut its parts anew: the parts of the last cut on as many
+// processes (weighted by the work then); else coordinate bisection at the cut's positions `at`
+// (checkpoints written before 2026-12-04 hold no parts).
+std::vector<int> ProcessesRun::restart_parts(const std::vector<double>& at, PartitionMethod bisection) const {
+  const StateArrays& restart = prep_.restart;
+  const long long count = restart.has("processes/count") ? restart.get_int("processes/count") : 1;
+  if (count != comm_.size() || !restart.i64.count("processes/cut_parts")) {
+    HostMesh moved = prep_.mesh;
+    moved.X = at;
+    return partition_elements(moved, comm_.size(), bisection);
+  }
+  const std::vector<long long>& cp = restart.int_array("processes/cut_parts");
+  const std::string& file = opt_.restart;
+  if (cp.size() != static_cast<size_t>(prep_.mesh.num_elems()))
+    throw InputError("checkpoint '" + file + "': processes/cut_parts has " + std::to_string(cp.size()) +
+                     " entries, not " + std::to_string(prep_.mesh.num_elems()) + " (the file is damaged)");
+  std::vector<int> elem_part;
+  for (long long p : cp) {
+    if (p < 0 || p >= comm_.size())
+      throw InputError("checkpoint '" + file + "': processes/cut_parts holds part " + std::to_string(p) +
+                       " outside [0, " + std::to_string(comm_.size() - 1) + "] (the file is damaged)");
+    elem_part.push_back(static_cast<int>(p));
+  }
+  return elem_part;
+}
+
+// Every process: its first part from process 0, the case's derived values (the others: from
+// process 0's mean element size, the same values) and case.json (process 0).
+void ProcessesRun::send_first_parts() {
+  {
+    setup_times::Phase phase("parts_sent");
+    receive_part();
+  }
+  comm_.min(&mean_size_, 1);  // process 0's
+  if (root_) {
+    write_file_atomic(prep_.out + "/case.json", c_.resolved.dump(2) + "\n");  // (defaults: prepare_run)
+  } else {
+    resolve_defaults(c_, mean_size_);  // the same values from the same mean size
+    hold_part_only();
+  }
+}
+
+// This process's part from process 0 (packed_ there).
+void ProcessesRun::receive_part() {
+  std::vector<char> mine;
+  comm_.scatter_bytes(packed_, mine);
+  part_ = unpack_submesh(mine);
+}
+
+// A process other than process 0 holds no whole mesh: its run loop's is an empty one with the
+// dimension and the part's body count.
+void ProcessesRun::hold_part_only() {
+  prep_.mesh = HostMesh{};
+  prep_.mesh.dim = c_.dim;
+  prep_.mesh.bodies = part_.mesh.bodies;
+}
+
+// The cuts so far of the run the checkpoint is of (a restart on as many processes cuts its parts
+// where that run did: process 0's parts at the start are the last cut's), and the state the first
+// parts start from.
+void ProcessesRun::take_restart_cuts() {
+  const StateArrays& restart = prep_.restart;
+  cuts_.load(restart);
+  if (root_ && cuts_.recuts > 0 && restart.has("processes/contact_recuts"))
+    cuts_.cut_parts = elem_part_at_start_;
+  cuts_.restarted = prep_.checkpoint();
+  from_ = prep_.checkpoint();
+}
+
+// This process's part run from from_ until the run ends or its parts are to be cut anew.
+LoopEnd ProcessesRun::run_part() {
+  HostMesh& mesh = prep_.mesh;  // (taken by the run loop)
+  return c_.dim == 2 ? run_dim<2>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_)
+                     : run_dim<3>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_);
+}
+
+// A cut into the CutHistory: why (for the progress note of the next parts), the balance's excesses,
+// this process's busy time in the parts that ended, the cut's time so far.
+void ProcessesRun::record_cut(const CutRequest& cut) {
+  ++cuts_.recuts;
+  cuts_.cut_seconds += cut.gather_seconds + cut.setup_seconds;
+  const bool work = cut.reason == "work";
+  cuts_.excess_after_cuts.push_back(cut.after_cut);
+  cuts_.excess_largest = std::max(cuts_.excess_largest, cut.largest);
+  cuts_.busy_seconds += cut.busy;
+  char why[200];
+  if (work) {
+    ++cuts_.rebalances;
+    cuts_.excess_at_rebalances.push_back(cut.excess);
+    std::snprintf(why, sizeof why,
+                  "the most loaded process's work was %.0f %% above the mean, "
+                  "parallel.rebalance_above = %.3g",
+                  100.0 * cut.excess, c_.rebalance_above);
+  } else {
+    std::snprintf(why, sizeof why, "nodes had moved far into the contact zones");
+  }
+  cuts_.last_cut_reason = why;
+  cuts_.cut_reasons.push_back(cut.reason);
+}
+
+// Process 0 at a cut: the new parts (parts_by_work; the test hook FDEM_TEST_RECUT moves every
+// element to another process), the elements that change process counted, every process's part
+// packed, and the whole state packed for each; the whole mesh again for the next run loop.
+std::vector<std::vector<char>> ProcessesRun::cut_anew() {
+  setup_times::Phase phase("decomposition");
+  const std::vector<double>& x = cuts_.state.array("model/x", static_cast<long long>(whole_->X.size()));
+  std::vector<int> elem_part = parts_by_work(x);
+  if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
+    for (int& p : elem_part) p = (p + cuts_.recuts) % comm_.size();
+  const std::vector<int>& before = cuts_.cut_parts.empty() ? elem_part_at_start_ : cuts_.cut_parts;
+  long long moved_now = 0;  // the elements that change process at this cut
+  for (size_t e = 0; e < elem_part.size(); ++e) moved_now += e >= before.size() || before[e] != elem_part[e];
+  cuts_.elements_moved_at_cuts.push_back(moved_now);
+  cuts_.elements_moved += moved_now;
+  cuts_.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)
+  packed_ = packed_parts(*whole_, elem_part, comm_.size(), whole_reach_, &x);
+  const std::vector<char> bytes = pack_state(cuts_.state);
+  std::vector<std::vector<char>> states(static_cast<size_t>(comm_.size()), bytes);
+  prep_.mesh = *whole_;
+  return states;
+}
+
+// The parts of a cut, at the current positions x: the elements weighted by their modelled work of
+// a step (WorkModel: their own and their nodes' contact work; docs/parallel.md "Rebalancing"), so
+// that the parts carry equal work, not equal element counts, where the contacts gather.
+std::vector<int> ProcessesRun::parts_by_work(const std::vector<double>& x) const {
+  const StateArrays& state = cuts_.state;
+  const std::vector<double>& nw = state.array("recut/node_work", static_cast<long long>(whole_->num_nodes()));
+  HostMesh moved = *whole_;
+  moved.X = x;
+  const std::vector<long long>& handed =
+      state.int_array("model/icontact", static_cast<long long>(whole_->num_ifaces()));
+  const std::vector<double> work = element_work(moved, nw, handed, c_.work_model);
+  if (!cut_by_graph()) return partition_elements_weighted(moved, comm_.size(), work);
+  // (measurement switch) METIS on the graph of the interfaces not handed over
+  std::vector<double> x3(3 * static_cast<size_t>(moved.num_nodes()), 0.0), gone(handed.size());
+  for (int n = 0; n < moved.num_nodes(); ++n)
+    for (int k = 0; k < moved.dim; ++k)
+      x3[3 * static_cast<size_t>(n) + k] = x[static_cast<size_t>(n) * moved.dim + k];
+  for (size_t i = 0; i < handed.size(); ++i) gone[i] = handed[i] != 0;
+  return partition_elements_weighted(moved_mesh(moved, x3, gone), comm_.size(), work, true);
+}
+
+// Every process at a cut: its new part and the whole state at the cut from process 0 (states
+// there), which the next parts start from.
+void ProcessesRun::send_cut(std::vector<std::vector<char>>& states) {
+  receive_part();
+  std::vector<char> mine;
+  comm_.scatter_bytes(states, mine);
+  cuts_.state = unpack_state(mine);
+  cuts_.state.file = "(the run's state where its parts were cut anew)";
+  if (!root_) hold_part_only();
+  from_ = &cuts_.state;
+}
+
+}  // namespace
+
+nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt) {
+  return ProcessesRun(case_path, c, opt).run();
+}
+
+}  // namespace fdem

@@ -1,0 +1,44 @@
+#pragma once
+// The set-up that run_case (solver/run.cpp) and the run over several processes
+// (solver/run_processes.cpp) share. Internal to src/solver.
+#include <memory>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "io/case.hpp"
+#include "io/checkpoint.hpp"
+#include "io/output.hpp"
+#include "mesh/mesh.hpp"
+#include "solver/run.hpp"
+#include "solver/run_loop.hpp"
+
+namespace fdem {
+
+// What run_case and the run over several processes set up alike before the model is built: the
+// checkpoint to go on from, the output folder, and on the process that writes (one process, or
+// process 0 of several) the folder made and locked, the prepared mesh, a restart's match with the
+// case and mesh, a new run's old outputs removed, the case's derived values (resolve_defaults).
+struct PreparedRun {
+  std::string out;                   // the output folder
+  std::unique_ptr<OutputLock> lock;  // the folder is this run's until it ends
+  bool restarting = false;           // RunOptions::restart given
+  StateArrays restart;               // its checkpoint
+  CheckpointHeader header;
+  HostMesh mesh;   // over several processes on process 0 only
+  RunIdentity id;  // (the mesh's hash on the process that writes)
+  // The checkpoint the run goes on from; null: a new run.
+  const StateArrays* checkpoint() const { return restarting ? &restart : nullptr; }
+};
+
+// Whether the run is over several processes (RunOptions::comm).
+bool over_processes(const RunOptions& opt);
+
+// The shared set-up (PreparedRun); over several processes every process calls it, and process 0
+// alone touches the output folder and meshes the case.
+PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions& opt);
+
+// A run over several processes (solver/run_processes.cpp): every process calls it.
+nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt);
+
+}  // namespace fdem
