@@ -17,11 +17,6 @@ namespace fdem {
 
 namespace {
 
-template <class V>
-auto mirror(const V& v) {
-  return Kokkos::create_mirror_view(v);
-}
-
 constexpr const char* kAxes[] = {"x", "y", "z"};
 
 // The outer boundary nodes (m.bnode) and their tributary areas (m.barea, per node id).
@@ -54,8 +49,8 @@ void boundary_areas(const HostMesh& mesh, Model<D>& m) {
   m.nb = static_cast<int>(area.size());
   m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
   m.barea = Kokkos::View<double*>("fdem::barea", m.nn);
-  auto bn_h = mirror(m.bnode);
-  auto ba_h = mirror(m.barea);
+  auto bn_h = Kokkos::create_mirror_view(m.bnode);
+  auto ba_h = Kokkos::create_mirror_view(m.barea);
   int b = 0;
   for (const auto& [node, a] : area) {
     bn_h(b) = node;
@@ -72,8 +67,8 @@ template <int D>
 double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, std::vector<std::string>& names) {
   if (static_cast<int>(c.platens.size()) > kMaxPlatens)
     throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
-  auto bn_h = mirror(m.bnode);
-  auto ba_h = mirror(m.barea);
+  auto bn_h = Kokkos::create_mirror_view(m.bnode);
+  auto ba_h = Kokkos::create_mirror_view(m.barea);
   Kokkos::deep_copy(bn_h, m.bnode);
   Kokkos::deep_copy(ba_h, m.barea);
   double step = std::numeric_limits<double>::infinity();
