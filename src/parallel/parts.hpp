@@ -91,6 +91,16 @@ class Parts {
     seconds += clock.seconds();
   }
 
+  // The own rows (the first `own`, `width` values each) of a per-node, per-element or
+  // per-interface field gathered into the whole mesh's order on process 0; the others' left empty
+  // (`ids`, `whole`: node_global() and whole_nodes(), or the elements' or interfaces'). One
+  // process: the field as it is (its rows are the whole mesh's, in order).
+  void gather_to_root(std::vector<double>& v, size_t own, size_t width, const std::vector<int>& ids,
+                      long whole) const {
+    if (!halo_) return;
+    v = gather_rows(*comm_, v.data(), own, width, ids, static_cast<size_t>(whole));
+  }
+
   // Bytes of ghost positions this process sends per step (0 on one process).
   long exchange_bytes() const { return halo_ ? halo_->send_bytes() : 0; }
 

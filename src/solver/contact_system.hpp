@@ -155,7 +155,7 @@ class ContactSystem {
   // or a force not zero), kPairRow values each: the node's whole-mesh id, its face's vertices'
   // whole-mesh ids (sorted), fn, ac, g0, fs (ids: local node to whole-mesh id; empty on one
   // process). A state without the lists themselves ("contact/pair_count": the whole state of a run
-  // over processes restarted on another count, Simulation::load_state_whole) is loaded from those
+  // over processes restarted on another count, load_whole_state, solver/whole_state.hpp) is loaded from those
   // rows: the pairs of the own nodes whose face this process holds, rebuilt into candidate lists at
   // the first step, which carries their histories over.
   static constexpr int kPairRow = 4 + 2 * D;

@@ -15,8 +15,9 @@
 //   and twice the excess at the first check after the last cut (a cut that could not do better is
 //   not repeated at once), the parts are cut anew weighted by the work (reason "work");
 // - the test hook FDEM_TEST_RECUT=N (tests/mpi/check_runs.py): a cut every N steps (reason "test").
-// Every process takes the same decisions from the same sums. Owned by Simulation (a run on one
-// process has no parts to cut: nothing here is called).
+// Every process takes the same decisions from the same sums. Owned by Simulation. A run on one
+// process (never started) holds the trivial checks: surfaces may meet where its contact system
+// says so, and nothing is ever to be cut.
 #include <vector>
 
 #include "io/work_model.hpp"
@@ -50,7 +51,8 @@ class CutChecks {
   void start(const SubMesh& part, const Model<D>& m, bool contact);
 
   // On a poll step: the agreement whether surfaces may meet on any process (returned), the zones'
-  // check and the balance (collective: every process calls it on the same step).
+  // check and the balance (collective: every process calls it on the same step). Not started (one
+  // process): the contact system's word.
   bool check(const Model<D>& m, const ContactSystem<D>& contact, const Parts<D>& parts, double dt,
              long step, double t);
 
@@ -76,6 +78,7 @@ class CutChecks {
                                       const Parts<D>& parts) const;
 
  private:
+  bool started_ = false;   // start(): a part of a run over processes
   double zone_reach_ = 0;  // SubMesh::contact_reach
   Kokkos::View<double* [D]> xcut_;
   bool due_ = false;

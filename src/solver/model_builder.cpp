@@ -334,7 +334,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     // count with each node's largest possible area
     platens_.contact_step(m, contact_->potential_area(), el.mass, sc);
     platens_.follow_surfaces(m, *contact_, t);
-    sc.may_meet = contact_->may_meet();
+    sc.may_meet = contact_meet_ = contact_->may_meet();
   }
   force_pass_contributes_ = parts_.force_pass_contributes(contact_ != nullptr);
 

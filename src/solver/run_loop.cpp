@@ -8,16 +8,12 @@
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
 #include "solver/summary.hpp"
+#include "solver/whole_state.hpp"
 
 namespace fdem {
 
 namespace {
 double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-// What a run over several processes (part: this process's part) reads that one process (part
-// null) does not: the mesh this process's model is built from, and the history table's part.
-const HostMesh& model_mesh(const HostMesh& whole, const SubMesh* part) { return part ? part->mesh : whole; }
-const HostMesh* history_part(const SubMesh* part) { return part ? &part->mesh : nullptr; }
 }  // namespace
 
 template <int D>
@@ -35,33 +31,25 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
       sim_(c, model_mesh(*mesh_, part)),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
-  join_parts(part);
+  parts_ = make_run_parts(sim_, opt, part, *cuts_, restart);
   writes_ = sim_.parts().root();
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
   counts_ = whole_counts();
   whole_ifaces_ = counts_.at("interfaces").get<long>();
-  if (restart) load_restart(*restart);
+  if (restart) parts_->load(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, history_part(part));
   if (restart) {
     restore(*restart);
   } else {
     if (writes_) history_->open(out, false);
-    if (fragments_on()) frag_ = make_fragments(nullptr, "");
+    if (fragments_on()) frag_ = parts_->fragments(c, *mesh_, out, nullptr, "");
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
-}
-
-// Over several processes: this process's part joins the run's decomposition (the processes agree
-// on the time step, the ghosts take their owners' state: Simulation::set_decomposition). One
-// process (part null) keeps the trivial one.
-template <int D>
-void RunLoop<D>::join_parts(const SubMesh* part) {
-  if (part) sim_.set_decomposition(opt_.comm, *part);
 }
 
 // For summary.json and the checkpoint header. A process of several that holds no whole mesh (not
@@ -71,34 +59,6 @@ nlohmann::json RunLoop<D>::whole_counts() const {
   if (writes_) return mesh_report(*mesh_);
   const Parts<D>& p = sim_.parts();
   return {{"nodes", p.whole_nodes()}, {"elements", p.whole_elems()}, {"interfaces", p.whole_ifaces()}};
-}
-
-// Over several processes the whole run's state: each part takes its rows; after a cut it checks
-// them; from a checkpoint on as many processes the balance is as it was (the excess after the last
-// cut decides the next rebalance; on another count the first check measures it anew). One
-// process: its checkpoint's state.
-template <int D>
-void RunLoop<D>::load_restart(const StateArrays& r) {
-  if (!sim_.parts().many()) {
-    sim_.load_state(r);
-    return;
-  }
-  sim_.load_state_whole(r);
-  if (began_at_cut())
-    check_recut(r);
-  else if (r.f64.count("processes/balance") && r.has("processes/count") &&
-           r.get_int("processes/count") == sim_.parts().size())
-    sim_.restore_balance(r.array("processes/balance", 2));
-}
-
-// Fragments: over several processes process 0 labels the whole mesh's from every part's interface
-// histories (the others send theirs); one process labels its model's.
-template <int D>
-std::unique_ptr<RunFragments<D>> RunLoop<D>::make_fragments(const RunState* restart,
-                                                            const std::string& file) {
-  if (sim_.parts().many())
-    return std::make_unique<RunFragments<D>>(sim_, c_, *mesh_, out_, writes_, restart, file);
-  return std::make_unique<RunFragments<D>>(sim_.m, out_, restart, file);
 }
 
 // The run loop's state from the checkpoint (every process of several: the same); history.csv,
@@ -114,7 +74,7 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   if (writes_) history_->open(out_, true);
-  if (fragments_on()) frag_ = make_fragments(&s, r.file);
+  if (fragments_on()) frag_ = parts_->fragments(c_, *mesh_, out_, &s, r.file);
   snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
 }
 
@@ -126,12 +86,7 @@ void RunLoop<D>::announce() const {
                "%.0f steps to end_time\n",
                c_.name.c_str(), sim_.m.nn, sim_.m.ne, sim_.m.ni, sim_.dt, sim_.dt / sim_.stable.critical,
                sim_.stable.critical, std::ceil(c_.end_time / sim_.dt));
-  if (sim_.parts().many())
-    std::fprintf(stderr,
-                 "fdem: %d processes; this one (0) holds %d of the nodes (%d ghosts), %d elements (%d ghosts); "
-                 "ghost positions sent per step: %ld bytes\n",
-                 sim_.parts().size(), sim_.m.nn, sim_.m.nn - sim_.m.owned_nodes(), sim_.m.ne,
-                 sim_.m.ne - sim_.m.owned_elems(), sim_.exchange_bytes());
+  parts_->announce();
   if (sim_.stable.contact_pending)
     std::fprintf(stderr,
                  "fdem: contact springs act once surfaces can meet (first failed interface); the critical "
@@ -198,10 +153,9 @@ LoopEnd RunLoop<D>::run() {
 template <int D>
 int RunLoop<D>::interrupt_signal() const {
   const int here = opt_.interrupt ? static_cast<int>(*opt_.interrupt) : 0;
-  // Over several processes a signal reaches each at its own moment: they look together, every
-  // kInterruptPoll steps, and stop at the same step if any has one (else some would wait forever
-  // for the others' exchange). One process looks at every step (the minimum over it: its own).
-  const long every = sim_.parts().many() ? kInterruptPoll : 1;
+  // (over several processes they look together, every few steps: RunParts::interrupt_poll; the
+  // minimum over one process is its own)
+  const long every = parts_->interrupt_poll();
   if (sim_.step_count % every != 0) return 0;
   double v = -static_cast<double>(here);
   sim_.parts().min(&v, 1);
@@ -222,7 +176,7 @@ LoopEnd RunLoop<D>::interrupted() {
                  "fdem: interrupted by %s at step %ld, t = %.6e s; checkpoint %s written; go on with: fdem "
                  "run %s --restart %s (and the same --set options%s)\n",
                  name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str(),
-                 sim_.parts().many() ? "; under mpirun with any number of processes, or without" : "");
+                 parts_->restart_note());
   return {LoopEnd::Kind::interrupted, finish("interrupted", loop_wall), {}};
 }
 
@@ -267,7 +221,7 @@ void RunLoop<D>::final_row() {
 template <int D>
 bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long written,
                                std::vector<RowPart>* rows) {
-  if (!save_simulation_state(st, rows)) return false;
+  if (!parts_->save(st, rows)) return false;
   RunState s;
   history_->save(s);
   if (frag_) frag_->save(s);
@@ -278,22 +232,6 @@ bool RunLoop<D>::collect_state(StateArrays& st, Clock::time_point c0, long writt
   s.checkpoint_seconds = ckpt_wall_;
   s.checkpoints_written = written;
   s.save(st);
-  return true;
-}
-
-// Over several processes the whole run's state on process 0 (the per-row entries: `rows`, each
-// its own), with the cuts so far (how a restart cuts its parts: solver/run.cpp) and the balance.
-// One process: its own state.
-template <int D>
-bool RunLoop<D>::save_simulation_state(StateArrays& st, std::vector<RowPart>* rows) const {
-  if (!sim_.parts().many()) {
-    sim_.save_state(st);
-    return true;
-  }
-  sim_.save_state_whole(st, rows);
-  if (!writes_) return false;
-  cuts_->save(st);
-  st.f64["processes/balance"] = {sim_.balance().after_cut, sim_.balance().largest};
   return true;
 }
 
@@ -309,7 +247,7 @@ LoopEnd RunLoop<D>::recut() {
   StateArrays& st = cuts_->state;
   st = StateArrays{};
   collect_state(st, c0, ckpt_written_);
-  st.f64["recut/mass_momentum"] = sim_.whole_mass_momentum();
+  st.f64["recut/mass_momentum"] = whole_mass_momentum(sim_);
   st.f64["recut/node_work"] = sim_.node_work_whole();  // (process 0: the weights of the cut)
   const auto& b = sim_.balance();
   // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
@@ -328,36 +266,13 @@ LoopEnd RunLoop<D>::recut() {
   return end;
 }
 
-// After a cut (every cut: the check costs one more gather of the state): the new parts hold the
-// state they were given, and the same mass and momentum (summed in another order: to 1e-12 of the
-// mass, and of the sum of m |v_k|).
-template <int D>
-void RunLoop<D>::check_recut(const StateArrays& given) {
-  sim_.check_state_whole(given);
-  std::vector<double> before(5, 0.0);
-  if (writes_) before = given.array("recut/mass_momentum", 5);
-  const std::vector<double> after = sim_.whole_mass_momentum();
-  if (!writes_) return;
-  bool ok = std::fabs(after[0] - before[0]) <= 1e-12 * before[0];
-  for (int k = 1; k < 4; ++k) ok = ok && std::fabs(after[k] - before[k]) <= 1e-12 * before[4];
-  if (!ok) {
-    char msg[320];
-    std::snprintf(msg, sizeof msg,
-                  "internal error: the parts cut anew hold mass %.17g and momentum (%.17g, %.17g, %.17g), "
-                  "not %.17g and (%.17g, %.17g, %.17g)",
-                  after[0], after[1], after[2], after[3], before[0], before[1], before[2], before[3]);
-    throw std::logic_error(msg);
-  }
-}
-
 template <int D>
 void RunLoop<D>::save_checkpoint() {
   const auto c0 = Clock::now();
   StateArrays st;
   std::vector<RowPart> rows;  // with the parallel HDF5: this process's rows, which it writes
   const Parts<D>& parts = sim_.parts();
-  // over several processes with the parallel HDF5 each writes its rows (collective)
-  const long long fapl = parts.many() && !gather_outputs() ? parts.comm().h5_parallel_access() : -1;
+  const long long fapl = parts_->checkpoint_access();  // >= 0: each process writes its rows (collective)
   if (!collect_state(st, c0, ckpt_written_ + 1, fapl >= 0 ? &rows : nullptr) && fapl < 0) {
     ++ckpt_written_;  // (process 0 writes the one file)
     ckpt_wall_ += seconds(Clock::now() - c0);
@@ -412,8 +327,7 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
       marks.push_back({{"fraction", p.tenth / 10.0}, {"step", p.step}, {"loop_seconds", p.loop_seconds}});
     summary["pace"] = {{"from_step", pace_step0_}, {"from_time", pace_t0_}, {"marks", marks}};
   }
-  if (sim_.parts().many())  // a run over several processes (collective)
-    summary["processes"] = processes_report(c_, sim_, *cuts_, loop0_, cut_setup_seconds());
+  parts_->report(summary, c_, loop0_, cut_setup_seconds());  // (over processes: collective)
   if (writes_) write_file_atomic(out_ + "/summary.json", summary.dump(2) + "\n");
   if (writes_) print_run_end(summary, r, sim_.step_count, opt_.progress);
   return summary;

@@ -16,6 +16,7 @@
 #include "solver/history_table.hpp"
 #include "solver/run.hpp"
 #include "solver/run_output.hpp"
+#include "solver/run_parts.hpp"
 #include "solver/run_progress.hpp"
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
@@ -65,14 +66,9 @@ class RunLoop {
 
  private:
   using Clock = std::chrono::steady_clock;
-  // Over several processes: this process's part joins the run's decomposition.
-  void join_parts(const SubMesh* part);
   // The whole mesh's counts (mesh_report on the process that holds it, else the part's).
   nlohmann::json whole_counts() const;
-  // The state to go on from (a checkpoint's, or the whole state at a cut).
-  void load_restart(const StateArrays& r);
   void restore(const StateArrays& r);
-  std::unique_ptr<RunFragments<D>> make_fragments(const RunState* restart, const std::string& file);
   void announce() const;
   void step(bool row, bool check);
   void history_row();
@@ -80,21 +76,17 @@ class RunLoop {
   void save_checkpoint();
   // The whole run's state (simulation and run loop) into st; over several processes on process 0
   // only (false elsewhere: it holds nothing). written: the checkpoints written with this one.
-  // rows: see Simulation::save_state_whole.
+  // rows: see save_whole_state (solver/whole_state.hpp).
   bool collect_state(StateArrays& st, Clock::time_point c0, long written,
                      std::vector<RowPart>* rows = nullptr);
-  // The simulation's part of it (and over several processes the cuts' and the balance's).
-  bool save_simulation_state(StateArrays& st, std::vector<RowPart>* rows) const;
   // The parts are to be cut anew (Simulation::recut_due): the whole state to cuts_->state; the
   // run over processes goes on with the new parts.
   LoopEnd recut();
-  void check_recut(const StateArrays& given);
   // Whether this run loop's parts began at a cut (their state is the cut's, not a checkpoint's).
   bool began_at_cut() const { return restart_ && restart_ == &cuts_->state; }
   LoopEnd interrupted();
   // The signal that asks the run to stop (0: none); over several processes the same on each.
   int interrupt_signal() const;
-  static constexpr long kInterruptPoll = 64;
   // (the whole mesh's interfaces: a part of a run over several processes may have none)
   bool fragments_on() const { return c_.output_fragments && whole_ifaces_ > 0; }
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
@@ -114,6 +106,7 @@ class RunLoop {
   // the loop's start (a share of the cut's time; 0 otherwise).
   double cut_setup_seconds() const;
   Simulation<D> sim_;
+  std::unique_ptr<RunParts<D>> parts_;  // the decomposition (one process: the trivial one)
   const int boundary_nodes_;  // before contact adds crack faces to the platens' nodes
   OutputSchedule schedule_;
   std::unique_ptr<HistoryTable<D>> history_;

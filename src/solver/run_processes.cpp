@@ -126,7 +126,7 @@ nlohmann::json ProcessesRun::run() {
     // thin layer around a compact region; METIS's graph does not know where fragments have flown),
     // decomposes the whole mesh with the zones at the current positions and sends each process its
     // part and the whole state, which each takes its rows of, as from a checkpoint
-    // (Simulation::load_state_whole): elements, nodes, interface and contact histories move to
+    // (load_whole_state, solver/whole_state.hpp): elements, nodes, interface and contact histories move to
     // their new owners.
     const auto cut0 = std::chrono::steady_clock::now();
     record_cut(end.cut);

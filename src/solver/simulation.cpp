@@ -398,7 +398,9 @@ void Simulation<D>::load_state(const StateArrays& s) {
     platens_.follow_surfaces(m, *contact_, t);
     contact_->law.mu = mu0_ / srf_;
     contact_->law.srf = srf_;
+    agree_on_meeting();  // (over processes: collective, as the restart is)
   }
+  parts_.exchange_ghosts(m, phase_times_.exchange);  // (one process: no ghosts)
 }
 
 template class Simulation<2>;

@@ -146,6 +146,7 @@ class Simulation {
 
   // Contact between bodies and fragments (null when the case has it off; see solver/contact_system.hpp).
   ContactSystem<D>* contact() { return contact_.get(); }
+  const ContactSystem<D>* contact() const { return contact_.get(); }
   // The force kernel's scatter view (benchmarks: contact updates timed on their own add into it).
   ForceScatter<D>& force_scatter() { return scatter_; }
   // Changes the damping from the next step on (e.g. settle quasi-statically, then run dynamically).
@@ -167,21 +168,12 @@ class Simulation {
   // positions, velocities, forces, interface history and handover flags, platen springs and
   // accumulators, damping and strength parameters, energy accumulators and reference, the last
   // sampled energies, and the contact system), under "simulation/", "model/" and "contact/".
-  // load_state checks the sizes and throws InputError naming the checkpoint file.
+  // load_state checks the sizes and throws InputError naming the checkpoint file. Over several
+  // processes this is one process's state; the whole run's is gathered from them and given back by
+  // solver/whole_state.hpp (load_state is then collective: it ends with the ghosts taking their
+  // owners' state and the processes agreeing whether surfaces may meet).
   void save_state(StateArrays& s) const;
   void load_state(const StateArrays& s);
-  // Over several processes (set_decomposition first; every process calls them at the same step):
-  // the checkpoint state of the whole run in the whole mesh's order, as one process would write
-  // it, on process 0 (the others' `whole` stays empty): the owners' rows of every per-node and
-  // per-interface entry, the sums of the per-process accumulators (and each process's own values
-  // under "processes/", so that a restart on as many processes goes on to the bit). load_state_whole
-  // takes such a state (or one process's checkpoint) on any number of processes: each picks the
-  // rows of its own and ghost items; the accumulators go back to their processes, or all to
-  // process 0 on another count. With `rows`, the per-node and per-interface entries are not
-  // gathered: each process gets its own rows of them there, for every process to write its own
-  // (write_checkpoint_rows, src/io/checkpoint.hpp); process 0's `whole` holds the rest.
-  void save_state_whole(StateArrays& whole, std::vector<RowPart>* rows = nullptr) const;
-  void load_state_whole(const StateArrays& whole);
 
   const std::vector<std::string>& platen_names() const { return platens_.names(); }
   const std::vector<std::string>& bc_names() const { return loads_.names(); }
@@ -200,15 +192,16 @@ class Simulation {
   // of its own surface nodes against every face it holds (its contact zone); the forces they put on
   // ghost nodes go back to the owners (Parts::return_ghost_forces). contact_meet_: whether surfaces
   // can meet on any process, agreed by agree_on_contact on the steps the contact systems poll for
-  // failed interfaces, with the check that no node has moved so far that the zones no longer hold
-  // every face a contact may need. Called by step() on the poll steps of a run over processes.
+  // failed interfaces (the only steps on which a contact system's word changes), with the checks
+  // of the zones and of the balance (solver/cut_checks.hpp). Called by step() on the poll steps.
+  // One process agrees with itself and has no zones to check.
   void agree_on_contact();
   // contact_meet_ from every process's contact system (collective).
   void agree_on_meeting();
-  // Whether surfaces can meet anywhere (contact's stable step then applies): over several
-  // processes as agreed on the last poll step, so that every process changes its step on the same
-  // step; on one process its contact system's word, at once.
-  bool surfaces_may_meet() const { return parts_.many() ? contact_meet_ : contact_->may_meet(); }
+  // Whether surfaces can meet anywhere (contact's stable step then applies): as agreed on the last
+  // poll step (or at the build or the restart), so that every process changes its step on the
+  // same step.
+  bool surfaces_may_meet() const { return contact_meet_; }
   // Over several processes with contact: whether the parts are to be cut anew, why, and the
   // balance, checked on contact's poll steps (solver/cut_checks.hpp); the run loop then cuts them
   // anew at the current positions (solver/run.cpp).
@@ -216,6 +209,7 @@ class Simulation {
   bool recut_due() const { return cuts_.due(); }
   const char* recut_reason() const { return cuts_.reason(); }
   const Balance& balance() const { return cuts_.balance(); }
+  const CutChecks<D>& cut_checks() const { return cuts_; }
   void restore_balance(const std::vector<double>& after_cut_largest) { cuts_.restore_balance(after_cut_largest); }
   // This process's modelled work of a step (ns; WorkModel); with a non-empty `node_work` (m.nn
   // entries) the own surface points' contact work is also added there per node.
@@ -225,27 +219,8 @@ class Simulation {
   // Over several processes (collective, at a cut): each node's contact work (ns per step) in the
   // whole mesh's order, on process 0 (empty elsewhere): the weights of the next cut.
   std::vector<double> node_work_whole() const { return cuts_.node_work_whole(m, contact_.get(), parts_); }
-  // Over several processes (collective): the mass and momentum summed over every process's own
-  // nodes, and the sum of m |v_k| (the scale of the momentum's round-off): 5 values (a 2D run's
-  // third momentum component 0).
-  std::vector<double> whole_mass_momentum() const;
-  // Over several processes (collective), right after load_state_whole: every node, element and
-  // interface owned by one process, and the whole state gathered again must be `given` (every
-  // node's position and velocity, every interface's history and handover flag, every contact pair
-  // with a history: nothing lost, nothing twice); process 0 throws std::logic_error naming what
-  // differs.
-  void check_state_whole(const StateArrays& given) const;
 
  private:
-  // Contact in the whole-run checkpoint (simulation_state_whole.cpp): each process's own lists and the
-  // pairs with a history in whole-mesh numbering; and what a restart takes of them.
-  // load_state_whole: the checksums of the entries read by rows, over the processes (throws
-  // InputError naming the dataset when one fails).
-  void verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
-                   const std::vector<uint64_t>& own_hash) const;
-  void save_contact_whole(const StateArrays& local, StateArrays& whole) const;
-  void load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const;
-  std::vector<double> decomposition_print() const;
   bool contact_meet_ = false;
   CutChecks<D> cuts_;  // over several processes with contact: when to cut the parts anew
   CohesiveParams coh0_{};  // interface parameters as given (before strength reduction)

@@ -2,7 +2,7 @@
 // (the decomposition, the time step and energy floor agreed, the first exchange), the agreement on
 // contact's poll steps (the checks of the contact zones and of the balance: solver/cut_checks.hpp),
 // and the gathering of the own fields on process 0 for the snapshots (the whole run's state:
-// simulation_state_whole.cpp; the exchanges themselves: src/parallel/parts.hpp).
+// solver/whole_state.hpp; the exchanges themselves: src/parallel/parts.hpp).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -64,7 +64,6 @@ void Simulation<D>::agree_on_meeting() {
 // of the contact zones and of the balance over processes (solver/cut_checks.hpp).
 template <int D>
 void Simulation<D>::agree_on_contact() {
-  if (!parts_.many()) return;  // one process: nothing to agree on (surfaces_may_meet), no zones
   contact_meet_ = cuts_.check(m, *contact_, parts_, dt, step_count, t);
 }
 
@@ -72,14 +71,12 @@ void Simulation<D>::agree_on_contact() {
 template <int D>
 void Simulation<D>::gather_whole(std::vector<double>& x, std::vector<double>& u, std::vector<double>& v,
                                  std::vector<double>& stress, std::vector<double>& damage) {
-  if (!parts_.many()) return;  // one process: its rows are the whole mesh's, in order
-  const Comm& comm = parts_.comm();
   const size_t nn = static_cast<size_t>(m.owned_nodes()), ne = static_cast<size_t>(m.owned_elems()),
                ni = static_cast<size_t>(m.owned_ifaces());
   const WholeRows w = whole_rows();
-  for (auto* a : {&x, &u, &v}) *a = gather_rows(comm, a->data(), nn, D, w.nodes, w.nn);
-  stress = gather_rows(comm, stress.data(), ne, 6, w.elems, w.ne);
-  damage = gather_rows(comm, damage.data(), ni, 1, w.ifaces, w.ni);
+  for (auto* a : {&x, &u, &v}) parts_.gather_to_root(*a, nn, D, w.nodes, w.nn);
+  parts_.gather_to_root(stress, ne, 6, w.elems, w.ne);
+  parts_.gather_to_root(damage, ni, 1, w.ifaces, w.ni);
 }
 
 #define FDEM_SIMULATION_PARALLEL(D)                                                            \

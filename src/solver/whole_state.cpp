@@ -1,8 +1,8 @@
-// Simulation's whole-run state over several processes (docs/parallel.md, "Checkpoints"): the state
-// of the whole run in the whole mesh's order for a checkpoint or a cut (save_state_whole; with the
-// parallel HDF5 each process's own rows left to it to write), a part's state taken from it
-// (load_state_whole; of a checkpoint written by rows each process reads and verifies its rows),
-// and the checks made after every cut (whole_mass_momentum, check_state_whole).
+// The whole run's state over several processes (solver/whole_state.hpp): the gather of a
+// checkpoint or a cut (save_whole_state; with the parallel HDF5 each process's own rows left to it
+// to write), a part's state taken from it (load_whole_state), and the checks made after every cut
+// (whole_mass_momentum, check_whole_state). Contact's lists travel as each process holds them,
+// and as pairs in whole-mesh numbering for a restart on another count.
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
@@ -13,7 +13,7 @@
 
 #include "common/error.hpp"
 #include "kernels/parts.hpp"
-#include "solver/simulation.hpp"
+#include "solver/whole_state.hpp"
 
 namespace fdem {
 
@@ -58,88 +58,13 @@ void put_entry(StateArrays& s, const std::string& name, const std::vector<double
   for (size_t i = 0; i < v.size(); ++i) out[i] = static_cast<long long>(v[i]);
 }
 
-}  // namespace
-
+// What identifies this process's part (its node count, own nodes and a hash of their whole-mesh
+// ids): a restart takes its own contact lists back only when its part is the same.
 template <int D>
-void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* rows) const {
-  StateArrays local;
-  save_state(local);
-  const bool root = parts_.comm().rank() == 0;
-  whole = StateArrays{};
-  if (root) whole = local;  // the entries every process holds alike; the others replaced below
-  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
-    double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
-    parts_.comm().min(&absent, 1);
-    if (absent > 0) continue;
-    const bool integer = local.i64.count(e.name) > 0;
-    const std::vector<double> v = entry_values(local, e.name);
-    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
-    const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
-    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
-    if (v.size() != blocks * n * w)
-      throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
-                       " values, not " + std::to_string(blocks * n * w));
-    if (rows) {  // each process writes its own rows (io/checkpoint.hpp: write_checkpoint_rows)
-      RowPart r;
-      r.name = e.name;
-      r.integer = integer;
-      r.whole_rows = e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces();
-      r.blocks = e.blocks;
-      r.width = e.width;
-      r.ids = e.nodes ? &parts_.node_global() : &parts_.iface_global();
-      r.own = own;
-      for (size_t b = 0; b < blocks; ++b)
-        r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
-      rows->push_back(std::move(r));
-      whole.f64.erase(e.name);
-      whole.i64.erase(e.name);
-      continue;
-    }
-    std::vector<double> out;
-    for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
-      const std::vector<double> rows = gather_rows(parts_.comm(), v.data() + b * n * w, own, w,
-                                                   e.nodes ? parts_.node_global() : parts_.iface_global(),
-                                                   static_cast<size_t>(e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces()));
-      out.insert(out.end(), rows.begin(), rows.end());
-    }
-    if (!root) continue;
-    whole.f64.erase(e.name);
-    whole.i64.erase(e.name);
-    put_entry(whole, e.name, out, integer);
-  }
-  for (const char* name : kSummedEntries) {
-    if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
-    const std::vector<double>& v = local.f64.at(name);
-    std::vector<double> all;
-    parts_.comm().gather(v, all);
-    if (!root || v.empty()) continue;
-    std::vector<double> total(v.size(), 0.0);
-    for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
-    whole.f64[name] = total;
-    whole.f64[kProcessesPrefix + name] = all;
-  }
-  if (root) whole.put_int(kProcessesPrefix + "count", parts_.comm().size());
-  if (contact_) {
-    save_contact_whole(local, whole);
-    // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
-    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), cuts_.cut_positions());
-    std::vector<double> own(xc.extent(0) * D);
-    for (size_t i = 0; i < xc.extent(0); ++i)
-      for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);
-    if (rows) {
-      RowPart r;
-      r.name = kProcessesPrefix + "cut_x";
-      r.whole_rows = parts_.whole_nodes();
-      r.width = D;
-      r.ids = &parts_.node_global();
-      r.own = xc.extent(0);
-      r.values = std::move(own);
-      rows->push_back(std::move(r));
-    } else {
-      std::vector<double> cut = gather_rows(parts_.comm(), own.data(), xc.extent(0), D, parts_.node_global(), parts_.whole_nodes());
-      if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
-    }
-  }
+std::vector<double> decomposition_print(const Simulation<D>& sim) {
+  const uint64_t h = fnv1a(sim.parts().node_global().data(), sim.parts().node_global().size() * sizeof(int));
+  return {static_cast<double>(sim.m.nn), static_cast<double>(sim.m.owned_nodes()), static_cast<double>(h >> 32),
+          static_cast<double>(h & 0xffffffffu)};
 }
 
 // Contact in the whole state: every process's own entries as they are, under "processes/" with
@@ -148,8 +73,8 @@ void Simulation<D>::save_state_whole(StateArrays& whole, std::vector<RowPart>* r
 // with a history in whole-mesh numbering ("contact/pairs": every process's rows), the counters
 // summed, whether surfaces may meet on any process, and the poll counter (the same on all).
 template <int D>
-void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& whole) const {
-  const bool root = parts_.comm().rank() == 0;
+void save_contact_whole(const Simulation<D>& sim, const StateArrays& local, StateArrays& whole) {
+  const bool root = sim.parts().comm().rank() == 0;
   std::vector<std::pair<std::string, bool>> names;  // (the same on every process: the same code wrote them)
   for (const auto& e : local.f64)
     if (e.first.rfind("contact/", 0) == 0) names.emplace_back(e.first, false);
@@ -158,8 +83,8 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
   for (const auto& [name, integer] : names) {
     const std::vector<double> v = entry_values(local, name);
     std::vector<double> all, sizes;
-    parts_.comm().gather(v, all);
-    parts_.comm().gather({static_cast<double>(v.size())}, sizes);
+    sim.parts().comm().gather(v, all);
+    sim.parts().comm().gather({static_cast<double>(v.size())}, sizes);
     if (!root) continue;
     whole.f64.erase(name);
     whole.i64.erase(name);
@@ -167,7 +92,7 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
     whole.f64[kProcessesPrefix + "sizes/" + name] = sizes;
   }
   std::vector<double> cut;
-  parts_.comm().gather(decomposition_print(), cut);
+  sim.parts().comm().gather(decomposition_print(sim), cut);
   if (!root) return;
   whole.f64[kProcessesPrefix + "contact_parts"] = cut;
   auto per = [&whole](const char* name) { return entry_values(whole, kProcessesPrefix + name); };
@@ -185,29 +110,20 @@ void Simulation<D>::save_contact_whole(const StateArrays& local, StateArrays& wh
   whole.put_int("contact/pair_row", ContactSystem<D>::kPairRow);
 }
 
-// What identifies this process's part (its node count, own nodes and a hash of their whole-mesh
-// ids): a restart takes its own contact lists back only when its part is the same.
-template <int D>
-std::vector<double> Simulation<D>::decomposition_print() const {
-  const uint64_t h = fnv1a(parts_.node_global().data(), parts_.node_global().size() * sizeof(int));
-  return {static_cast<double>(m.nn), static_cast<double>(m.owned_nodes()), static_cast<double>(h >> 32),
-          static_cast<double>(h & 0xffffffffu)};
-}
-
-// This process's contact entries from the whole state (load_state_whole): its own as they were
+// This process's contact entries from the whole state (load_whole_state): its own as they were
 // where the run had as many processes cut the same way; else (another count, or a single
 // process's checkpoint) the pairs in whole-mesh numbering, from which ContactSystem::load_state
 // takes those of its own nodes (counters: process 0 the sums, the others nothing).
 template <int D>
-void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count, StateArrays& mine) const {
+void load_contact_whole(const Simulation<D>& sim, const StateArrays& whole, long long count, StateArrays& mine) {
   for (auto it = mine.f64.begin(); it != mine.f64.end();)
     it = it->first.rfind("contact/", 0) == 0 ? mine.f64.erase(it) : std::next(it);
   for (auto it = mine.i64.begin(); it != mine.i64.end();)
     it = it->first.rfind("contact/", 0) == 0 ? mine.i64.erase(it) : std::next(it);
   const std::string parts = kProcessesPrefix + "contact_parts", sizes = kProcessesPrefix + "sizes/";
-  const std::vector<double> print = decomposition_print();
-  const size_t w = print.size(), r = static_cast<size_t>(parts_.comm().rank());
-  const bool same = count == parts_.comm().size() && whole.f64.count(parts) &&
+  const std::vector<double> print = decomposition_print(sim);
+  const size_t w = print.size(), r = static_cast<size_t>(sim.parts().comm().rank());
+  const bool same = count == sim.parts().comm().size() && whole.f64.count(parts) &&
                     whole.f64.at(parts).size() == w * static_cast<size_t>(count) &&
                     std::equal(print.begin(), print.end(), whole.f64.at(parts).begin() + r * w);
   if (same) {
@@ -236,21 +152,21 @@ void Simulation<D>::load_contact_whole(const StateArrays& whole, long long count
     const bool integer = whole.i64.count(name) > 0;
     std::vector<double> v = entry_values(whole, name);
     const std::string n = name;
-    if (parts_.comm().rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
+    if (sim.parts().comm().rank() != 0 && (n == "contact/builds" || n == "contact/handed_over" || n == "contact/list_updates" ||
                                n == "contact/dissipated"))
       std::fill(v.begin(), v.end(), 0.0);
     put_entry(mine, name, v, integer);
   }
 }
 
-// The rows read by every process (load_state_whole): each row is one process's own, so the sum of
+// The rows read by every process (load_whole_state): each row is one process's own, so the sum of
 // their checksum terms over the processes is the entry's checksum. The same verdict on every
 // process.
 template <int D>
-void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std::string>& names,
-                                const std::vector<uint64_t>& own_hash) const {
+void verify_rows(const Simulation<D>& sim, const StateArrays& whole, const std::vector<std::string>& names,
+                 const std::vector<uint64_t>& own_hash) {
   const std::vector<uint64_t> totals =
-      fdem::sum_hashes_over_processes(own_hash, [this](double* v, int n) { parts_.comm().sum(v, n); });
+      fdem::sum_hashes_over_processes(own_hash, [&sim](double* v, int n) { sim.parts().sum(v, n); });
   for (size_t k = 0; k < names.size(); ++k) {
     const uint64_t total = totals[k];
     if (!rows_checksum_matches(whole, names[k], total)) {
@@ -258,34 +174,118 @@ void Simulation<D>::verify_rows(const StateArrays& whole, const std::vector<std:
       std::snprintf(sum, sizeof sum, "%016llx", static_cast<unsigned long long>(total));
       throw InputError("restart file '" + whole.file + "' is damaged: dataset '" + names[k] +
                        "' fails its checksum (stored " + whole.by_rows.at(names[k]) + "; the rows read by the " +
-                       std::to_string(parts_.comm().size()) + " processes give " + sum + ")");
+                       std::to_string(sim.parts().comm().size()) + " processes give " + sum + ")");
+    }
+  }
+}
+
+}  // namespace
+
+template <int D>
+void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<RowPart>* rows) {
+  StateArrays local;
+  sim.save_state(local);
+  const bool root = sim.parts().comm().rank() == 0;
+  whole = StateArrays{};
+  if (root) whole = local;  // the entries every process holds alike; the others replaced below
+  for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
+    double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
+    sim.parts().comm().min(&absent, 1);
+    if (absent > 0) continue;
+    const bool integer = local.i64.count(e.name) > 0;
+    const std::vector<double> v = entry_values(local, e.name);
+    const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
+    const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
+    const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+    if (v.size() != blocks * n * w)
+      throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
+                       " values, not " + std::to_string(blocks * n * w));
+    if (rows) {  // each process writes its own rows (io/checkpoint.hpp: write_checkpoint_rows)
+      RowPart r;
+      r.name = e.name;
+      r.integer = integer;
+      r.whole_rows = e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces();
+      r.blocks = e.blocks;
+      r.width = e.width;
+      r.ids = e.nodes ? &sim.parts().node_global() : &sim.parts().iface_global();
+      r.own = own;
+      for (size_t b = 0; b < blocks; ++b)
+        r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+      rows->push_back(std::move(r));
+      whole.f64.erase(e.name);
+      whole.i64.erase(e.name);
+      continue;
+    }
+    std::vector<double> out;
+    for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
+      const std::vector<double> rows = gather_rows(sim.parts().comm(), v.data() + b * n * w, own, w,
+                                                   e.nodes ? sim.parts().node_global() : sim.parts().iface_global(),
+                                                   static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces()));
+      out.insert(out.end(), rows.begin(), rows.end());
+    }
+    if (!root) continue;
+    whole.f64.erase(e.name);
+    whole.i64.erase(e.name);
+    put_entry(whole, e.name, out, integer);
+  }
+  for (const char* name : kSummedEntries) {
+    if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
+    const std::vector<double>& v = local.f64.at(name);
+    std::vector<double> all;
+    sim.parts().comm().gather(v, all);
+    if (!root || v.empty()) continue;
+    std::vector<double> total(v.size(), 0.0);
+    for (size_t j = 0; j < all.size(); ++j) total[j % v.size()] += all[j];
+    whole.f64[name] = total;
+    whole.f64[kProcessesPrefix + name] = all;
+  }
+  if (root) whole.put_int(kProcessesPrefix + "count", sim.parts().comm().size());
+  if (sim.contact()) {
+    save_contact_whole(sim, local, whole);
+    // where the parts were cut (a restart cuts its parts there: the zones then hold as they did)
+    auto xc = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sim.cut_checks().cut_positions());
+    std::vector<double> own(xc.extent(0) * D);
+    for (size_t i = 0; i < xc.extent(0); ++i)
+      for (int k = 0; k < D; ++k) own[i * D + k] = xc(i, k);
+    if (rows) {
+      RowPart r;
+      r.name = kProcessesPrefix + "cut_x";
+      r.whole_rows = sim.parts().whole_nodes();
+      r.width = D;
+      r.ids = &sim.parts().node_global();
+      r.own = xc.extent(0);
+      r.values = std::move(own);
+      rows->push_back(std::move(r));
+    } else {
+      std::vector<double> cut = gather_rows(sim.parts().comm(), own.data(), xc.extent(0), D, sim.parts().node_global(), sim.parts().whole_nodes());
+      if (root) whole.f64[kProcessesPrefix + "cut_x"] = std::move(cut);
     }
   }
 }
 
 template <int D>
-void Simulation<D>::load_state_whole(const StateArrays& whole) {
+void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
   // This part's state as it stands (just built): the rows the whole state does not give (the
   // ghost nodes' velocities, forces and platen springs, which no step reads and the run leaves as
   // they were built) stay as they are.
   StateArrays local;
-  save_state(local);
+  sim.save_state(local);
   StateArrays mine = whole;
   std::vector<std::string> by_rows;  // the entries read by rows from the file, and the checksum
   std::vector<uint64_t> own_hash;    // terms of this process's own rows of each
-  for (const ItemEntry& e : item_entries<D>(m.platens.count)) {
+  for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
     if (!local.has(e.name)) continue;
     const bool integer = local.i64.count(e.name) > 0;
     std::vector<double> v = entry_values(local, e.name);
-    const size_t n = static_cast<size_t>(e.nodes ? m.nn : m.ni);
-    const size_t whole_n = static_cast<size_t>(e.nodes ? parts_.whole_nodes() : parts_.whole_ifaces());
+    const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
+    const size_t whole_n = static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
     // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
     // interface's (each part computes its interfaces from the same history)
-    const size_t rows = e.nodes ? static_cast<size_t>(m.owned_nodes()) : n;
-    const std::vector<int>& ids = e.nodes ? parts_.node_global() : parts_.iface_global();
+    const size_t rows = e.nodes ? static_cast<size_t>(sim.m.owned_nodes()) : n;
+    const std::vector<int>& ids = e.nodes ? sim.parts().node_global() : sim.parts().iface_global();
     if (whole.by_rows.count(e.name)) {  // left in the file (write_checkpoint_rows): these rows only
-      const size_t own = static_cast<size_t>(e.nodes ? m.owned_nodes() : m.owned_ifaces());
+      const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
       uint64_t h = 0;
       const std::vector<double> got = read_rows(whole, e.name, ids, rows, own, e.blocks,
                                                 static_cast<long long>(whole_n), e.width, h);
@@ -307,45 +307,44 @@ void Simulation<D>::load_state_whole(const StateArrays& whole) {
     mine.i64.erase(e.name);
     put_entry(mine, e.name, v, integer);
   }
-  verify_rows(whole, by_rows, own_hash);
+  verify_rows(sim, whole, by_rows, own_hash);
   // the accumulators: each process its own where the count is the same, else all on process 0
   const long long count = whole.i64.count(kProcessesPrefix + "count") ? whole.get_int(kProcessesPrefix + "count") : 1;
   for (const char* name : kSummedEntries) {
     if (!whole.f64.count(name)) continue;
     std::vector<double> v = whole.f64.at(name);
     const std::string parts = kProcessesPrefix + name;
-    if (count == parts_.comm().size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
-      std::copy(whole.f64.at(parts).begin() + parts_.comm().rank() * v.size(),
-                whole.f64.at(parts).begin() + (parts_.comm().rank() + 1) * v.size(), v.begin());
-    else if (parts_.comm().rank() != 0)
+    if (count == sim.parts().comm().size() && whole.f64.count(parts) && whole.f64.at(parts).size() == v.size() * count)
+      std::copy(whole.f64.at(parts).begin() + sim.parts().comm().rank() * v.size(),
+                whole.f64.at(parts).begin() + (sim.parts().comm().rank() + 1) * v.size(), v.begin());
+    else if (sim.parts().comm().rank() != 0)
       std::fill(v.begin(), v.end(), 0.0);
     mine.f64[name] = v;
   }
-  if (contact_) load_contact_whole(whole, count, mine);
-  load_state(mine);
-  parts_.exchange_ghosts(m, phase_times_.exchange);
+  if (sim.contact()) load_contact_whole(sim, whole, count, mine);
+  sim.load_state(mine);  // (which ends with the ghosts taking their owners' state)
 }
 
 template <int D>
-std::vector<double> Simulation<D>::whole_mass_momentum() const {
+std::vector<double> whole_mass_momentum(const Simulation<D>& sim) {
   double s[5];
-  mass_momentum(m, s);
-  parts_.comm().sum(s, 5);
+  mass_momentum(sim.m, s);
+  sim.parts().comm().sum(s, 5);
   return {s[0], s[1], s[2], s[3], s[4]};
 }
 
 template <int D>
-void Simulation<D>::check_state_whole(const StateArrays& given) const {
+void check_whole_state(const Simulation<D>& sim, const StateArrays& given) {
   StateArrays again;
-  save_state_whole(again);
+  save_whole_state(sim, again);
   // each node, element and interface owned once (a duplicate would also leave one without owner)
-  double owned[3] = {static_cast<double>(m.owned_nodes()), static_cast<double>(m.owned_elems()),
-                     static_cast<double>(m.owned_ifaces())};
-  parts_.comm().sum(owned, 3);
-  if (parts_.comm().rank() != 0) return;
+  double owned[3] = {static_cast<double>(sim.m.owned_nodes()), static_cast<double>(sim.m.owned_elems()),
+                     static_cast<double>(sim.m.owned_ifaces())};
+  sim.parts().comm().sum(owned, 3);
+  if (sim.parts().comm().rank() != 0) return;
   std::string diff;
-  const double whole[3] = {static_cast<double>(parts_.whole_nodes()), static_cast<double>(parts_.whole_elems()),
-                           static_cast<double>(parts_.whole_ifaces())};
+  const double whole[3] = {static_cast<double>(sim.parts().whole_nodes()), static_cast<double>(sim.parts().whole_elems()),
+                           static_cast<double>(sim.parts().whole_ifaces())};
   const char* what[3] = {"nodes", "elements", "interfaces"};
   for (int k = 0; k < 3; ++k)
     if (owned[k] != whole[k])
@@ -353,7 +352,7 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
               std::to_string(static_cast<long>(whole[k]));
   for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact"})
     if (given.has(name) && entry_values(given, name) != entry_values(again, name)) diff += std::string(" ") + name;
-  if (contact_) {  // the pairs with a history, in any order
+  if (sim.contact()) {  // the pairs with a history, in any order
     const size_t w = ContactSystem<D>::kPairRow;
     auto rows = [w](const std::vector<double>& v) {
       std::vector<std::vector<double>> r;
@@ -370,18 +369,13 @@ void Simulation<D>::check_state_whole(const StateArrays& given) const {
     throw std::logic_error("internal error: the parts cut anew do not hold the run's state they were given:" + diff);
 }
 
-#define FDEM_SIMULATION_STATE_WHOLE(D)                                                         \
-  template void Simulation<D>::save_state_whole(StateArrays&, std::vector<RowPart>*) const;   \
-  template void Simulation<D>::verify_rows(const StateArrays&, const std::vector<std::string>&, \
-                                           const std::vector<uint64_t>&) const;                \
-  template std::vector<double> Simulation<D>::whole_mass_momentum() const;                     \
-  template void Simulation<D>::check_state_whole(const StateArrays&) const;                    \
-  template void Simulation<D>::save_contact_whole(const StateArrays&, StateArrays&) const;     \
-  template void Simulation<D>::load_contact_whole(const StateArrays&, long long, StateArrays&) const; \
-  template std::vector<double> Simulation<D>::decomposition_print() const;                     \
-  template void Simulation<D>::load_state_whole(const StateArrays&);
-FDEM_SIMULATION_STATE_WHOLE(2)
-FDEM_SIMULATION_STATE_WHOLE(3)
-#undef FDEM_SIMULATION_STATE_WHOLE
+#define FDEM_WHOLE_STATE(D)                                                                    \
+  template void save_whole_state<D>(const Simulation<D>&, StateArrays&, std::vector<RowPart>*); \
+  template void load_whole_state<D>(Simulation<D>&, const StateArrays&);                       \
+  template std::vector<double> whole_mass_momentum<D>(const Simulation<D>&);                   \
+  template void check_whole_state<D>(const Simulation<D>&, const StateArrays&);
+FDEM_WHOLE_STATE(2)
+FDEM_WHOLE_STATE(3)
+#undef FDEM_WHOLE_STATE
 
 }  // namespace fdem
