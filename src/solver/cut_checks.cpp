@@ -72,6 +72,11 @@ bool CutChecks<D>::check(const Model<D>& m, const ContactSystem<D>& contact, con
 }
 
 template <int D>
+bool CutChecks<D>::may_meet(bool agreed, const ContactSystem<D>& contact) const {
+  return started_ ? agreed : contact.may_meet();
+}
+
+template <int D>
 double CutChecks<D>::modelled_work(const Model<D>& m, const ContactSystem<D>* contact,
                                    const Kokkos::View<double*>& node_work) const {
   // the interfaces handed over to contact (or failed with contact off) return at their flag: about

@@ -16,8 +16,8 @@
 //   not repeated at once), the parts are cut anew weighted by the work (reason "work");
 // - the test hook FDEM_TEST_RECUT=N (tests/mpi/check_runs.py): a cut every N steps (reason "test").
 // Every process takes the same decisions from the same sums. Owned by Simulation. A run on one
-// process (never started) holds the trivial checks: surfaces may meet where its contact system
-// says so, and nothing is ever to be cut.
+// process (never started) holds the trivial checks: surfaces may meet as soon as its contact
+// system says so, and nothing is ever to be cut.
 #include <vector>
 
 #include "io/work_model.hpp"
@@ -55,6 +55,11 @@ class CutChecks {
   // process): the contact system's word.
   bool check(const Model<D>& m, const ContactSystem<D>& contact, const Parts<D>& parts, double dt,
              long step, double t);
+
+  // Whether surfaces may meet anywhere (contact's stable step then applies): over processes as
+  // `agreed` on the last check, so that every process changes its step on the same step; not
+  // started (one process): the contact system's word at once.
+  bool may_meet(bool agreed, const ContactSystem<D>& contact) const;
 
   // The parts are to be cut anew (set on the same step on every process), and why: "work",
   // "zones" or "test", the first of them on the step it was asked.

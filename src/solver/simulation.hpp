@@ -198,10 +198,10 @@ class Simulation {
   void agree_on_contact();
   // contact_meet_ from every process's contact system (collective).
   void agree_on_meeting();
-  // Whether surfaces can meet anywhere (contact's stable step then applies): as agreed on the last
-  // poll step (or at the build or the restart), so that every process changes its step on the
-  // same step.
-  bool surfaces_may_meet() const { return contact_meet_; }
+  // Whether surfaces can meet anywhere (contact's stable step then applies): over several
+  // processes as agreed on the last poll step, so that every process changes its step on the same
+  // step; on one process its contact system's word, at once (CutChecks::may_meet).
+  bool surfaces_may_meet() const { return cuts_.may_meet(contact_meet_, *contact_); }
   // Over several processes with contact: whether the parts are to be cut anew, why, and the
   // balance, checked on contact's poll steps (solver/cut_checks.hpp); the run loop then cuts them
   // anew at the current positions (solver/run.cpp).
