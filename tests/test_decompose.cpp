@@ -421,6 +421,8 @@ TEST(Decompose, PartsPackedAndUnpackedAreTheSameAndDamageIsRefused) {
     EXPECT_EQ(b.owned_ifaces, a.owned_ifaces);
     EXPECT_EQ(b.bulk_elems, a.bulk_elems);
     EXPECT_EQ(b.whole_set_size, a.whole_set_size);
+    EXPECT_EQ(b.iface_ids, a.iface_ids);
+    EXPECT_EQ(b.iface_ids, s.iface_global);  // (the strength scatter's draw)
     EXPECT_EQ(u.node_global, s.node_global);
     EXPECT_EQ(u.elem_global, s.elem_global);
     EXPECT_EQ(u.iface_global, s.iface_global);

@@ -113,6 +113,41 @@ double pull_until_failure(const Case& given, std::vector<double>& damage) {
 }
 
 // The weaker interface material fails first, at its own strength (stress = force / height).
+// A rule that applies to no interface is named in a warning (the run goes on); rules in use are not.
+TEST(InterfaceMaterials, RulesThatApplyToNoInterfaceAreNamed) {
+  HostMesh mesh = two_region_bar();
+  const Case c = two_region_case(2e6, 4e6);
+  EXPECT_TRUE(unused_material_rules(c, mesh).empty());
+  // region b is the last block alone: no interface has both sides in it; the pair (a, b) has one
+  for (size_t e = 0; e < mesh.elem_region.size(); ++e) mesh.elem_region[e] = e < 10 ? 0 : 1;
+  Case more = c;
+  more.file = "t.json";
+  more.pair_iface_material[{"b", "ghost"}] = 2;  // a region the mesh does not have
+  const std::vector<std::string> w = unused_material_rules(more, mesh);
+  ASSERT_EQ(w.size(), 2u);
+  EXPECT_NE(w[0].find("t.json: fracture.region_materials.b: no interface has both sides in region 'b'"),
+            std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("a warning"), std::string::npos) << w[0];
+  EXPECT_NE(w[1].find("fracture.pair_materials [b, ghost]"), std::string::npos) << w[1];
+}
+
+// A part of a run over processes draws each interface's factor from the whole mesh's index of the
+// interface (HostMesh::iface_ids), so the field is the same on any number of processes.
+TEST(InterfaceMaterials, ScatterOfAPartIsDrawnFromTheWholeMeshIndex) {
+  const HostMesh whole = two_region_bar();
+  Case c = two_region_case(2e6, 4e6);
+  c.scatter.distribution = "weibull";
+  c.scatter.modulus = 5;
+  c.scatter.seed = 11;
+  const InterfaceMaterialMap all = interface_material_map(c, whole);
+  HostMesh part = whole;
+  part.iface_ids = {4, 3, 2, 1, 0};  // its interfaces in another order (their geometry aside)
+  const InterfaceMaterialMap mine = interface_material_map(c, part);
+  ASSERT_EQ(mine.scale.size(), 5u);
+  for (int q = 0; q < 5; ++q) EXPECT_EQ(mine.scale[q], all.scale[4 - q]) << q;
+  EXPECT_NE(all.scale[0], all.scale[4]);
+}
+
 TEST(InterfaceMaterials, WeakerMaterialFailsFirstAtItsStrength) {
   std::vector<double> d;
   // region b weakest (2 MPa): one of its interfaces (3, 4) fails, no other initiates

@@ -15,6 +15,7 @@
 
 #include "common/error.hpp"
 #include "io/case.hpp"
+#include "io/output.hpp"
 #include "mesh/mesh.hpp"
 #include "parallel/partition.hpp"
 #include "solver/run.hpp"
@@ -351,6 +352,12 @@ TEST(Partition, CommandWritesStatsAndRejectsBadInput) {
     EXPECT_EQ(system_status(fdem + " " + args + " --out " + dir + " > " + dir + ".err 2>&1"), 2) << args;
     const std::string err = slurp(dir + ".err");
     for (const auto& w : words) EXPECT_NE(err.find(w), std::string::npos) << args << ": " << err;
+  }
+  {  // a folder in use by another run or partition (its lock held here) is refused, not raced on
+    const fdem::OutputLock held(dir);
+    EXPECT_EQ(system_status(fdem + " --parts 4 --out " + dir + " > " + dir + ".err 2>&1"), 2);
+    const std::string err = slurp(dir + ".err");
+    EXPECT_NE(err.find("is in use by another fdem run"), std::string::npos) << err;
   }
   fs::remove_all(dir);
   fs::remove(dir + ".log");

@@ -218,6 +218,9 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
       std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
     } else if (app.got_subcommand("partition")) {
+      if (g_comm && g_comm->size() > 1)  // (each process would write the same files)
+        throw fdem::InputError("fdem partition runs on one process: it partitions the mesh for --parts N "
+                               "processes without MPI; run it without mpirun");
       const auto r = fdem::partition_case(o.case_path, o.sets, o.parts, o.method, o.out_dir, o.snapshot);
       std::cout << fdem::partition_report_text(r) << "wrote " << r["files"][0].get<std::string>() << ", "
                 << r["files"][1].get<std::string>() << "\n";

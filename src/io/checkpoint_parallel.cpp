@@ -87,6 +87,9 @@ std::vector<uint64_t> write_rows(const std::vector<RowPart>& rows, const Checkpo
                     lcpl.get(), dcpl.get(), H5P_DEFAULT),
          H5Dclose);
     if (!fspace.ok() || !d.ok()) w.fail("cannot create dataset '" + r.name + "'");
+    // an empty entry (no platens, no interfaces: the same on every process) has nothing to write;
+    // HDF5 refuses a write into a dataset of no values
+    if (n == 0) continue;
     const hsize_t m = r.integer ? o.i64.size() : o.f64.size();
     Id mspace = h5::memory_space(m);
     if (!h5::select_runs(fspace.get(), o.runs) || !mspace.ok())
@@ -161,6 +164,8 @@ std::vector<double> read_rows(const StateArrays& s, const std::string& name, con
   const hsize_t n = static_cast<hsize_t>(blocks) * static_cast<hsize_t>(whole_rows) * w;
   if (!fspace.ok() || !type.ok() || H5Sget_simple_extent_npoints(fspace.get()) != static_cast<hssize_t>(n))
     damaged("has another size than " + std::to_string(n) + " values");
+  own_hash = 0;
+  if (n == 0) return {};  // an empty entry (no platens, no interfaces): written without a value
   const bool integer = H5Tget_class(type.get()) == H5T_INTEGER;
   // this process's rows in increasing order in the file, as runs
   const std::vector<size_t> order = h5::order_by(ids.data(), count);

@@ -54,6 +54,9 @@ struct HostMesh {
   std::vector<int> outer_faces;
   int pieces = -1;
   double whole_min_size = 0;  // the whole mesh's smallest element size (contact's penetration depth)
+  // A part: the whole mesh's index of each interface, from which a strength scatter without
+  // correlation draws its factor (the same field on any number of processes). Empty: a whole mesh.
+  std::vector<int> iface_ids;
 
   int nodes_per_elem() const { return dim + 1; }
   int num_nodes() const { return dim ? static_cast<int>(X.size()) / dim : 0; }

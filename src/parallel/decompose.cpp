@@ -519,6 +519,7 @@ void Decomposer::local_mesh(const PartItems& it, SubMesh& s) {
   }
   s.elem_global = els;
   s.iface_global = ifs;
+  m.iface_ids = ifs;  // (the strength scatter's draw: solver/interface_materials.cpp)
 }
 
 // The sets: node sets of the own nodes, interface sets of the counted interfaces (local indices).

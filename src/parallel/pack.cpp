@@ -131,6 +131,7 @@ void submesh_fields(S& s, F&& f) {
   f(m.outer_faces);
   f(m.pieces);
   f(m.whole_min_size);
+  f(m.iface_ids);
   f(s.contact_reach);
   f(s.cut_x);
   f(s.node_global);

@@ -171,10 +171,45 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
         map.scale[q] = static_cast<float>(factor_from_gaussian(c.scatter, field.gaussian(x)));
       });
     } else {
-      for (long q = 0; q < ni; ++q) map.scale[q] = static_cast<float>(strength_factor(c.scatter, q));
+      // drawn from the whole mesh's index of the interface (a part's: mesh.iface_ids)
+      const bool part = !mesh.iface_ids.empty();
+      for (long q = 0; q < ni; ++q)
+        map.scale[q] = static_cast<float>(strength_factor(c.scatter, part ? mesh.iface_ids[q] : q));
     }
   }
   return map;
+}
+
+std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh) {
+  // interfaces per (region of side A, region of side B)
+  const size_t nr = mesh.region_names.size(), absent = ~size_t{0};
+  std::vector<long> between(nr * nr, 0);
+  const size_t ni = static_cast<size_t>(mesh.num_ifaces());
+  if (mesh.iface_elems.size() == 2 * ni)
+    for (size_t q = 0; q < ni; ++q)
+      ++between[static_cast<size_t>(mesh.elem_region[mesh.iface_elems[2 * q]]) * nr +
+                static_cast<size_t>(mesh.elem_region[mesh.iface_elems[2 * q + 1]])];
+  auto index = [&](const std::string& r) {
+    const auto it = std::find(mesh.region_names.begin(), mesh.region_names.end(), r);
+    return it == mesh.region_names.end() ? absent : static_cast<size_t>(it - mesh.region_names.begin());
+  };
+  auto count = [&](const std::string& ra, const std::string& rb) {
+    const size_t a = index(ra), b = index(rb);
+    if (a == absent || b == absent) return 0L;
+    return between[a * nr + b] + (a == b ? 0 : between[b * nr + a]);
+  };
+  const std::string kept = " (the rule applies to none; a warning: the run goes on without it)";
+  std::vector<std::string> out;
+  for (const auto& rule : c.region_iface_material)
+    if (count(rule.first, rule.first) == 0)
+      out.push_back(c.file + ": fracture.region_materials." + rule.first + ": no interface has both sides in region '" +
+                    rule.first + "'" + kept);
+  for (const auto& rule : c.pair_iface_material)
+    if (count(rule.first.first, rule.first.second) == 0)
+      out.push_back(c.file + ": fracture.pair_materials [" + rule.first.first + ", " + rule.first.second +
+                    "]: no interface lies between regions '" + rule.first.first + "' and '" + rule.first.second +
+                    "'" + kept);
+  return out;
 }
 
 nlohmann::json interface_material_report(const Case& c, const InterfaceMaterialMap& map) {

@@ -26,7 +26,14 @@ struct InterfaceMaterialMap {
 // thread count).
 InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh);
 
-// The strength factor of interface q for a scatter (mean 1), a pure function of (seed, q).
+// The rules of fracture.region_materials and fracture.pair_materials that apply to no interface
+// of the (whole) mesh: one warning each, naming the case file, the key and the regions. A warning,
+// not an error: a generated mesh (grains) may leave a region out, and the run is still what the
+// rest of the case says.
+std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh);
+
+// The strength factor of interface q for a scatter (mean 1), a pure function of (seed, q) (q: the
+// whole mesh's index of the interface, HostMesh::iface_ids on a part).
 double strength_factor(const StrengthScatter& s, long q);
 
 // A spatially correlated scatter (StrengthScatter::correlation_length l > 0): a standard normal

@@ -112,6 +112,8 @@ nlohmann::json partition_case(const std::string& case_path, const std::vector<st
                      " is out of range: give an integer in [1, number of elements]");
   Case c = load_case(case_path, overrides);
   const std::string out = out_dir.empty() ? "out/" + c.name : out_dir;
+  ensure_output_dir(out);
+  const OutputLock lock(out);  // the folder is this command's until it ends (as a run's)
   const HostMesh mesh = prepare_mesh(c);
   partition_init(method);  // MPI_Init for Zoltan: not part of the partition's time
   const auto t0 = std::chrono::steady_clock::now();
@@ -142,7 +144,6 @@ nlohmann::json partition_case(const std::string& case_path, const std::vector<st
                              {"imbalance", kept.imbalance}}},
                            {"rebalanced", partition_stats_json(r)}};
   }
-  ensure_output_dir(out);
   write_file_atomic(out + "/partition.json", report.dump(2) + "\n");
   write_partition_vtk(out + "/partition.vtk", mesh, part);
   report["files"] = {out + "/partition.json", out + "/partition.vtk (cell fields part, region)"};

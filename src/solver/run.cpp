@@ -75,6 +75,10 @@ HostMesh prepare_mesh(const Case& c) {
     for (const auto& kv : c.surface_iface_material) cut.push_back(kv.first);
     insert_interfaces(mesh, frac, cut);
   }
+  for (std::string& w : unused_material_rules(c, mesh)) {  // (the whole mesh's interfaces)
+    std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+    mesh.warnings.push_back(std::move(w));
+  }
   add_region_node_sets(mesh, region_sets_used(c));
   // the exact count (a .msh file's is known only now), before the model is allocated
   check_fits_in_memory(mesh.num_elems(), mesh.dim, "the mesh of " + source);
@@ -133,10 +137,10 @@ PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions&
   const bool many = over_processes(opt);
   PreparedRun p;
   p.restarting = !opt.restart.empty();
-  // over several processes a checkpoint holds the whole run's state (Simulation::save_state_whole):
+  // over several processes a checkpoint holds the whole run's state (save_whole_state, solver/whole_state.hpp):
   // every process reads it and takes its part's rows, whatever the process count that wrote it; of
   // the entries written by rows (write_checkpoint_rows) each process reads only its rows
-  // (Simulation::load_state_whole)
+  // (load_whole_state, solver/whole_state.hpp)
   if (p.restarting) p.restart = read_checkpoint(opt.restart, p.header, many);
   p.out = opt.out_dir.empty() ? "out/" + c.name : opt.out_dir;
   p.id.case_hash = case_hash(c);

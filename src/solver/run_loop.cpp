@@ -177,6 +177,7 @@ LoopEnd RunLoop<D>::interrupted() {
                  "run %s --restart %s (and the same --set options%s)\n",
                  name, sim_.step_count, sim_.t, ck.c_str(), c_.file.c_str(), ck.c_str(),
                  parts_->restart_note());
+  if (writes_) std::fputs(parts_->exit_note(), stderr);
   return {LoopEnd::Kind::interrupted, finish("interrupted", loop_wall), {}};
 }
 

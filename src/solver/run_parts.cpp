@@ -31,6 +31,7 @@ class OnePart final : public RunParts<D> {
   }
   long interrupt_poll() const override { return 1; }
   const char* restart_note() const override { return ""; }
+  const char* exit_note() const override { return ""; }
   void announce() const override {}
   void report(nlohmann::json&, const Case&, std::chrono::steady_clock::time_point, double) const override {}
 
@@ -80,6 +81,12 @@ class ManyParts final : public RunParts<D> {
   // exchange).
   long interrupt_poll() const override { return kInterruptPoll; }
   const char* restart_note() const override { return "; under mpirun with any number of processes, or without"; }
+  // Kept as it is on purpose: mpirun decides its own exit status.
+  const char* exit_note() const override {
+    return "fdem: every process exits with 128 + the signal, which mpirun passes on when the signal reached the "
+           "processes (srun, a kill of the processes); Open MPI's mpirun exits with 1 when the signal was sent to "
+           "mpirun itself: summary.json's stop_reason \"interrupted\" and the checkpoint say the run stopped\n";
+  }
   void announce() const override {
     const Model<D>& m = sim_.m;
     std::fprintf(stderr,

@@ -41,8 +41,10 @@ class RunParts {
                                                      const RunState* restart, const std::string& file) const = 0;
   // Every how many steps the processes look together for a signal that asks them to stop.
   virtual long interrupt_poll() const = 0;
-  // What the message of an interrupted run adds to its restart command.
+  // What the message of an interrupted run adds to its restart command, and a line on its exit
+  // status (empty on one process, which exits with 128 + the signal).
   virtual const char* restart_note() const = 0;
+  virtual const char* exit_note() const = 0;
   // The progress line of the decomposition at the start (none on one process).
   virtual void announce() const = 0;
   // summary.json "processes" (collective; none on one process).

@@ -86,6 +86,7 @@ class ProcessesRun {
  private:
   void first_parts();
   std::vector<int> restart_parts(const std::vector<double>& at, PartitionMethod bisection) const;
+  void check_every_part_filled(const std::vector<int>& elem_part) const;
   void send_first_parts();
   void receive_part();
   void hold_part_only();
@@ -142,6 +143,10 @@ nlohmann::json ProcessesRun::run() {
 // and the skin, and contact.zone), and the whole mesh is kept for cutting the parts anew.
 void ProcessesRun::first_parts() {
   const HostMesh& mesh = prep_.mesh;
+  if (mesh.num_elems() < comm_.size())
+    throw InputError(c_.file + ": the mesh has " + std::to_string(mesh.num_elems()) + " elements, fewer than the " +
+                     std::to_string(comm_.size()) + " processes of this run: run it on at most " +
+                     std::to_string(mesh.num_elems()) + " processes (mpirun -n), or with a finer mesh");
   const MeshQuality mq = mesh_quality(mesh);
   mean_size_ = mq.mean_size;
   setup_times::Phase phase("decomposition");
@@ -166,12 +171,25 @@ void ProcessesRun::first_parts() {
       resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0
           ? restart_parts(*at, bisection)
           : partition_elements(mesh, comm_.size(), method);
+  check_every_part_filled(elem_part);
   packed_ = packed_parts(mesh, elem_part, comm_.size(), reach, at);
   elem_part_at_start_ = std::move(elem_part);
   if (reach > 0) {
     whole_ = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
     whole_reach_ = reach;
   }
+}
+
+// A partitioner may leave a process without elements on a tiny mesh (METIS does): its part would
+// have no time step. Refused with the counts and what to do.
+void ProcessesRun::check_every_part_filled(const std::vector<int>& elem_part) const {
+  std::vector<long> per(static_cast<size_t>(comm_.size()), 0);
+  for (int p : elem_part) ++per[static_cast<size_t>(p)];
+  for (size_t p = 0; p < per.size(); ++p)
+    if (per[p] == 0)
+      throw InputError(c_.file + ": the partition of the mesh's " + std::to_string(elem_part.size()) +
+                       " elements leaves process " + std::to_string(p) + " of " + std::to_string(comm_.size()) +
+                       " without an element: run it on fewer processes (mpirun -n), or with a finer mesh");
 }
 
 // Process 0 at a restart of a run that cut its parts anew: the parts of the last cut on as many

@@ -37,6 +37,11 @@ byte (its parts are cut where the run last cut them), on 2 within the bounds. An
 (tests/mpi/exploding_disc.json: 12 sectors fly apart and turn, so they cross every boundary between
 the parts; cut anew 13 times) keeps the momentum zero to round-off in every row, the mass and the
 counts, on 1-4 processes (check_exploding).
+The bar of tests/data/cases (two velocity BCs, no platens) with and without interfaces on 2 and 3
+processes: a checkpoint, the snapshots and a SIGTERM write their empty entries (no platen, no
+interface) and the restart ends with the uninterrupted run's history.csv byte for byte; with an
+independent Weibull strength field the first damage falls in the same row on 1, 2 and 3 processes
+and the histories agree within the bounds above, and a restart on 3 is byte for byte (check_small_cases).
 Then: a run whose nodes cross the contact zone faster than any cut can follow ends with exit 2 and
 one message naming contact.zone, and a run that blows up on every process ends with exit 3 and no
 hang.
@@ -491,6 +496,153 @@ def check_exploding(fdem):
                   f"{name}: {col} {rows[-1][c]:.0f} against {rows1[-1][c]:.0f}")
 
 
+# A case without platens (the bar of tests/data/cases: two velocity BCs) and the same without
+# interfaces: their checkpoints and snapshots hold empty entries ("model/platen_fs" with no platen,
+# "model/ihist" with no interface), which every process must write by rows and read back.
+# The bar to 1.2 ms (about 7 000 steps; with the Weibull field below its first interface damages
+# near 0.3 ms and fails near 0.9 ms), a row every 1.2 us (a SIGTERM lands early), a checkpoint at
+# 0.6 ms.
+BAR = "tests/data/cases/bar.json"
+BAR_SETS = ["time.end_time=1.2e-3", "output.history_rows=1000", "output.snapshot_count=5"]
+SMALL = {
+    "bar": BAR_SETS,
+    "bar-no-interfaces": BAR_SETS + ["fracture=null", "interface_materials=null"],
+}
+BAR_CHECKPOINT = ["--checkpoint-every", "6e-4"]
+# an independent (uncorrelated) Weibull strength per interface: each factor is drawn from the whole
+# mesh's index of its interface, so the field is the same on any number of processes
+WEIBULL = BAR_SETS + ['fracture.scatter={"distribution": "weibull", "modulus": 5, "seed": 7}']
+
+
+def interrupt(fdem, n, case, sets, out, rows=50):
+    """Runs the case under mpirun and sends SIGTERM once history.csv has `rows` rows: (exit, stderr)."""
+    import time
+    p = subprocess.Popen(command(fdem, n, case, sets, out), env=ENV, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True)
+    t0 = time.time()
+    hist = os.path.join(out, "history.csv")
+    while time.time() - t0 < 60 and not (os.path.exists(hist) and sum(1 for _ in open(hist)) > rows):
+        time.sleep(0.01)
+    p.send_signal(15)
+    try:
+        _, err = p.communicate(timeout=60)
+        return p.returncode, err
+    except subprocess.TimeoutExpired:
+        p.kill()
+        return None, "the processes did not end within 60 s"
+
+
+def check_small_cases(fdem):
+    """The bar with and without interfaces on 2 and 3 processes: a checkpoint, the snapshots and a
+    SIGTERM lose nothing (the restart ends with the uninterrupted run's history.csv byte for byte);
+    and a Weibull strength field the same on 1, 2 and 3 processes and across a restart."""
+    for name, sets in SMALL.items():
+        for n in (2, 3):
+            ref = os.path.join(WORK, f"{name}-{n}")
+            r = run(fdem, n, BAR, sets, ref)
+            check(r.returncode == 0 and os.path.exists(os.path.join(ref, "snapshots.h5")),
+                  f"{name}, {n} processes: exit {r.returncode}, snapshots written")
+            if r.returncode != 0:
+                print(r.stderr[-2000:])
+                continue
+            ck = os.path.join(WORK, f"{name}-{n}-ck")
+            r = run(fdem, n, BAR, sets, ck, extra=BAR_CHECKPOINT)
+            check(r.returncode == 0 and os.path.exists(os.path.join(ck, "checkpoint.h5")),
+                  f"{name}, {n} processes, a checkpoint at half the run: exit {r.returncode}")
+            if r.returncode != 0:
+                print(r.stderr[-2000:])
+                continue
+            out = os.path.join(WORK, f"{name}-{n}-restart")
+            shutil.copytree(ck, out)
+            r = run(fdem, n, BAR, sets, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
+            check(r.returncode == 0 and same_file(os.path.join(out, "history.csv"), os.path.join(ref, "history.csv")),
+                  f"{name}, {n} processes restarted from the checkpoint on {n}: exit {r.returncode}, history.csv "
+                  "the same byte for byte as the run that did not stop")
+            # stopped by SIGTERM: its checkpoint and summary written, the restart ends as the run that
+            # was not stopped
+            out = os.path.join(WORK, f"{name}-{n}-sigterm")
+            code, err = interrupt(fdem, n, BAR, sets, out)
+            try:
+                s = json.load(open(os.path.join(out, "summary.json")))
+            except (OSError, ValueError):
+                s = {}
+            check(s.get("stop_reason") == "interrupted" and os.path.exists(os.path.join(out, "checkpoint.h5")),
+                  f"{name}, {n} processes, SIGTERM: exit {code}, stop reason {s.get('stop_reason')}, checkpoint "
+                  "written" + ("" if s else ": " + err[-1500:]))
+            if s:
+                r = run(fdem, n, BAR, sets, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
+                check(r.returncode == 0 and same_file(os.path.join(out, "history.csv"),
+                                                      os.path.join(ref, "history.csv")),
+                      f"{name}, {n} processes, the restart after SIGTERM: exit {r.returncode}, history.csv the "
+                      "same byte for byte as the run that did not stop")
+    outs = {}
+    cols = ["right_reaction_x [N]", "E_interface [J]"]
+    for n in (1, 2, 3):
+        out = os.path.join(WORK, f"weibull-{n}")
+        r = run(fdem, n, BAR, WEIBULL, out)
+        check(r.returncode == 0, f"Weibull strength, {n} process(es): exit {r.returncode}")
+        if r.returncode == 0:
+            outs[n] = history(os.path.join(out, "history.csv"))
+    for n in (2, 3):
+        if 1 in outs and n in outs:
+            (h, a), (_, b) = outs[1], outs[n]
+            j = h.index("interfaces_damaged")
+            first = [next((r[0] for r in rows if r[j] > 0), None) for rows in (a, b)]
+            check(first[0] is not None and first[0] == first[1],
+                  f"Weibull strength, {n} processes: the first damage in the same row as on 1 (t = {first[1]} "
+                  f"against {first[0]} s)")
+            compare(f"Weibull strength ({n} processes)", cols, 1e-6, 1e-9, outs[1], outs[n], n)
+            fa, fb = last_frame(os.path.join(WORK, "weibull-1")), last_frame(os.path.join(WORK, f"weibull-{n}"))
+            if fa is not None:
+                compare_frames("Weibull strength", fa, fb, n)
+    ck = os.path.join(WORK, "weibull-3-ck")
+    r = run(fdem, 3, BAR, WEIBULL, ck, extra=BAR_CHECKPOINT)
+    out = os.path.join(WORK, "weibull-3-restart")
+    if r.returncode == 0:
+        shutil.copytree(ck, out)
+        r = run(fdem, 3, BAR, WEIBULL, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
+    check(r.returncode == 0 and same_file(os.path.join(out, "history.csv"),
+                                          os.path.join(WORK, "weibull-3", "history.csv")),
+          f"Weibull strength, 3 processes restarted on 3: exit {r.returncode}, history.csv the same byte for byte "
+          "as the run that did not stop")
+
+
+def check_refusals(fdem):
+    """What a run over processes refuses, with the counts and what to do: a mesh of fewer elements
+    than processes; `fdem partition` under mpirun (each process would write the same files). A
+    SIGTERM that reaches the processes themselves (as srun or a kill of the processes sends it) ends
+    mpirun with 143."""
+    r = run(fdem, 5, BAR, ["mesh.cells=[1, 1]"], os.path.join(WORK, "tiny"), timeout=120)
+    said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+    check(r.returncode == 2 and len(said) == 1 and "has 4 elements, fewer than the 5 processes" in said[0]
+          and "--parts" not in said[0],
+          f"a mesh of 4 elements on 5 processes: exit {r.returncode}, {said}")
+    cmd = command(fdem, 2, BAR, [], os.path.join(WORK, "partition"))
+    at = cmd.index("run")
+    cmd[at:at + 1] = ["partition"]
+    cmd = [c for c in cmd if c != "--quiet"] + ["--parts", "2"]
+    r = subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=120)
+    said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+    check(r.returncode == 2 and len(said) == 1 and "runs on one process" in said[0],
+          f"fdem partition under mpirun: exit {r.returncode}, {said}")
+    import time
+    out = os.path.join(WORK, "sigterm-processes")
+    p = subprocess.Popen(command(fdem, 2, BAR, BAR_SETS + ["time.end_time=2e-2"], out), env=ENV,
+                         stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    hist = os.path.join(out, "history.csv")
+    t0 = time.time()
+    while time.time() - t0 < 60 and not (os.path.exists(hist) and sum(1 for _ in open(hist)) > 50):
+        time.sleep(0.01)
+    subprocess.run(["pkill", "-TERM", "-f", "fdem run .*" + out + " "])
+    try:
+        _, err = p.communicate(timeout=60)
+        check(p.returncode == 143 and "interrupted by SIGTERM" in err,
+              f"SIGTERM to the processes under mpirun: mpirun exits {p.returncode} (143)")
+    except subprocess.TimeoutExpired:
+        p.kill()
+        check(False, "SIGTERM to the processes under mpirun: they did not end within 60 s")
+
+
 def history(path):
     with open(path) as f:
         rows = list(csv.reader(f))
@@ -711,6 +863,9 @@ def main():
               f"multi-particle impact, 3 processes: bodies.csv ({len(rb)} bodies) and the per-body summary as on 1 "
               f"({pa.get('broken')} broken, {pb.get('broken')} on 3)")
 
+    print("no platens, no interfaces, a Weibull strength field")
+    check_small_cases(fdem)
+
     print("refusals and failures")
     # the 2D impact with a contact zone of 0.01 mm: its nodes cross it within the 25 steps between
     # two checks even right after a cut
@@ -747,9 +902,9 @@ def main():
         _, err = p.communicate(timeout=60)
         s = json.load(open(os.path.join(out, "summary.json")))
         check(s.get("stop_reason") == "interrupted" and "interrupted by SIGTERM" in err and
-              "checkpoint" in err and s.get("steps", 3000) < 3000,
+              "checkpoint" in err and s.get("steps", 3000) < 3000 and "Open MPI's mpirun exits with 1" in err,
               f"SIGTERM to mpirun: stopped at step {s.get('steps')}, summary.json stop reason {s.get('stop_reason')}, "
-              "checkpoint written")
+              f"checkpoint written; exit {p.returncode} (mpirun's own), the message says so")
         r = run(fdem, 2, sig_case, sig_sets, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
         check(r.returncode == 0 and same_file(os.path.join(out, "history.csv"), os.path.join(ref, "history.csv")),
               f"the restart after SIGTERM on 2 processes: exit {r.returncode}, history.csv the same byte for byte as "
@@ -759,6 +914,7 @@ def main():
         check(False, "SIGTERM to mpirun: the processes did not end within 60 s")
     except (OSError, ValueError) as e:
         check(False, f"SIGTERM to mpirun: no summary.json ({e})")
+    check_refusals(fdem)
     if not keep:
         shutil.rmtree(WORK, ignore_errors=True)
     print(f"{'all checks passed' if not failures else str(len(failures)) + ' check(s) FAILED'}")
