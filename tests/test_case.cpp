@@ -895,4 +895,102 @@ TEST(CaseDefaults, RunCaseJsonShowsDerivedStiffness) {
   fs::remove_all(dir, ec);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Cross-key checks of docs/robustness.md section 4 (issue "Robustness III").
+
+// A frictional joint (ft = c = 0) starts failed and only contact carries it: with contact switched
+// off its blocks would pass through each other. Refused, naming the case file, contact.enabled, the
+// material and the rule that gives it to interfaces; cohesive interfaces without contact still run.
+TEST(CaseErrors, FrictionalJointWithContactOffIsRefused) {
+  json d = base_doc();
+  d["interface_materials"]["joint"] = {{"kn", 6e13}, {"ks", 2.5e13}, {"ft", 0}, {"c", 0}, {"phi_deg", 30}};
+  d["contact"] = {{"enabled", false}};
+  EXPECT_EQ(error_of(d), "<no error>");  // cif is cohesive
+
+  d["fracture"]["interface_material"] = "joint";
+  EXPECT_THROW(fdem::parse_case(d, "test.json"), InputError);
+  std::string msg = error_of(d);
+  EXPECT_HAS(msg, "test.json: contact.enabled: is false");
+  EXPECT_HAS(msg, "interface material 'joint' (fracture.interface_material)");
+  EXPECT_HAS(msg, "frictional joint");
+  EXPECT_HAS(msg, "switch contact on");
+  EXPECT_HAS(msg, "interface_materials.joint a tensile strength ft > 0 or a cohesion c > 0");
+  // the case file is named
+  TempDir tmp;
+  const std::string path = tmp.write("joint.json", d.dump());
+  EXPECT_THROW(fdem::load_case(path), InputError);
+  EXPECT_HAS(load_error(path), path + ": contact.enabled");
+  // contact on (or automatic) carries the joint
+  for (const json& on : {json(true), json("auto")}) {
+    json e = d;
+    e["contact"]["enabled"] = on;
+    EXPECT_EQ(error_of(e), "<no error>");
+  }
+  json e = d;
+  e["contact"].erase("enabled");
+  EXPECT_EQ(error_of(e), "<no error>");
+
+  // by region, and by named surface
+  d["fracture"]["interface_material"] = "cif";
+  d["fracture"]["region_materials"] = {{"body", "joint"}};
+  msg = error_of(d);
+  EXPECT_HAS(msg, "contact.enabled");
+  EXPECT_HAS(msg, "'joint' (fracture.region_materials.body)");
+  d["fracture"] = {
+      {"regions", json::array()}, {"interface_material", "cif"}, {"surfaces", {{"top", "joint"}}}};
+  msg = error_of(d);
+  EXPECT_HAS(msg, "contact.enabled");
+  EXPECT_HAS(msg, "'joint' (fracture.surfaces.top)");
+  // a frictional default that no interface can take (the only region has its own material)
+  d["fracture"] = {
+      {"regions", {"body"}}, {"interface_material", "joint"}, {"region_materials", {{"body", "cif"}}}};
+  EXPECT_EQ(error_of(d), "<no error>");
+}
+
+// A --set value's objects take each key once, as a case file's do (the last one won before).
+TEST(CaseOverrides, DuplicateKeyInAValueIsRefused) {
+  const std::string ov = R"(contact={"kn": 1e12, "kn": 2e12})";
+  EXPECT_THROW(fdem::parse_case(base_doc(), "test.json", {ov}), InputError);
+  std::string msg = error_of(base_doc(), {ov});
+  EXPECT_HAS(msg, "test.json: --set '" + ov + "': contact.kn: duplicate key");
+  // nested, inside an array
+  msg = error_of(base_doc(), {R"(boundary.fixed=[{"set": "left", "components": "x", "set": "right"}])"});
+  EXPECT_HAS(msg, "boundary.fixed.0.set: duplicate key");
+  // the same key in two objects is no duplicate; neither is a string value
+  EXPECT_EQ(error_of(base_doc(), {R"(damping={"local": 0.5, "change": {"time": 1, "local": 0.1}})"}),
+            "<no error>");
+  EXPECT_EQ(error_of(base_doc(), {"name=kn_kn"}), "<no error>");
+}
+
+// Weibull factors are not truncated: `lower` and `upper` belong to the normal distribution and are
+// refused with Weibull as `cov` is (they were read and ignored before).
+TEST(CaseErrors, WeibullScatterRefusesLowerAndUpper) {
+  json d = base_doc();
+  d["fracture"]["scatter"] = {{"distribution", "weibull"}, {"modulus", 5}};
+  EXPECT_EQ(error_of(d), "<no error>");
+  for (const char* key : {"lower", "upper"}) {
+    json e = d;
+    e["fracture"]["scatter"][key] = std::string(key) == "lower" ? 0.5 : 2.0;
+    EXPECT_THROW(fdem::parse_case(e, "test.json"), InputError);
+    const std::string msg = error_of(e);
+    EXPECT_HAS(msg, "test.json: fracture.scatter." + std::string(key) + ": is for the normal distribution");
+  }
+  d["fracture"]["scatter"] = {{"distribution", "normal"}, {"cov", 0.2}, {"lower", 0.5}, {"upper", 2}};
+  const Case c = fdem::parse_case(d, "test.json");
+  EXPECT_DOUBLE_EQ(c.scatter.lower, 0.5);
+  EXPECT_DOUBLE_EQ(c.scatter.upper, 2.0);
+}
+
+// The same monitor twice would give history.csv the same columns twice.
+TEST(CaseErrors, MonitorListedTwiceIsRefused) {
+  json d = base_doc();
+  d["output"]["monitors"] = {"left", "right", "left"};
+  EXPECT_THROW(fdem::parse_case(d, "test.json"), InputError);
+  const std::string msg = error_of(d);
+  EXPECT_HAS(msg, "test.json: output.monitors.2: monitor 'left' is listed twice (also output.monitors.0)");
+  EXPECT_HAS(error_of(base_doc(), {R"(output.monitors=["right", "right"])"}), "output.monitors.1");
+  d["output"]["monitors"] = {"left", "right", "region.body"};
+  EXPECT_EQ(fdem::parse_case(d, "test.json").monitors.size(), 3u);
+}
+
 }  // namespace

@@ -4,6 +4,7 @@
 #include <limits>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/case_internal.hpp"
@@ -92,6 +93,51 @@ void read_initial_velocity(json& b, Case& c, const Reader& R) {
   }
 }
 
+// The first rule of "fracture" that gives interfaces a frictional joint material (ft = c = 0), as
+// {key path, material index}; {"", -1} when none does. fracture.interface_material counts where an
+// interface may take it: a fracturable region without a region_materials rule, or a fracturable
+// region and another region without a pair_materials rule (the mesh decides whether they touch).
+std::pair<std::string, int> frictional_rule(const Case& c) {
+  auto frictional = [&c](int m) { return m >= 0 && c.interface_materials[m].frictional(); };
+  auto fracturable = [&c](const std::string& r) {
+    return std::find(c.fracturable_regions.begin(), c.fracturable_regions.end(), r) !=
+           c.fracturable_regions.end();
+  };
+  if (frictional(c.fracture_material)) {
+    bool default_used = false;
+    for (const std::string& r : c.fracturable_regions) {
+      default_used = default_used || !c.region_iface_material.count(r);
+      for (const auto& kv : c.region_material)
+        if (kv.first != r)
+          default_used = default_used || !c.pair_iface_material.count(std::minmax(r, kv.first));
+    }
+    if (default_used) return {"fracture.interface_material", c.fracture_material};
+  }
+  for (const auto& [r, m] : c.region_iface_material)
+    if (fracturable(r) && frictional(m)) return {child("fracture.region_materials", r), m};
+  for (const auto& [rs, m] : c.pair_iface_material)
+    if ((fracturable(rs.first) || fracturable(rs.second)) && frictional(m))
+      return {"fracture.pair_materials (regions '" + rs.first + "', '" + rs.second + "')", m};
+  for (const auto& [surface, m] : c.surface_iface_material)
+    if (frictional(m)) return {child("fracture.surfaces", surface), m};
+  return {"", -1};
+}
+
+// With contact switched off a frictional joint carries nothing (its interfaces start failed and
+// handed over to contact): the bodies on either side would pass through each other.
+void check_frictional_joints_have_contact(const Case& c, const Reader& R) {
+  if (c.contact.enabled != 0) return;
+  const auto [rule, m] = frictional_rule(c);
+  if (m < 0) return;
+  const std::string& name = c.interface_materials[m].name;
+  R.fail("contact.enabled",
+         "is false, but interface material '" + name + "' (" + rule +
+             ") is a frictional joint (ft = 0 and c = 0): its interfaces start failed and only contact "
+             "carries them, so without contact they carry nothing and the bodies on either side pass "
+             "through each other; switch contact on (\"enabled\": true or \"auto\") or give " +
+             child("interface_materials", name) + " a tensile strength ft > 0 or a cohesion c > 0");
+}
+
 }  // namespace
 
 void read_boundary(json& doc, Case& c, const Reader& R) {
@@ -161,6 +207,7 @@ void read_contact(json& doc, Case& c, const Reader& R) {
   c.contact.cohesion = R.number(ct, P, "cohesion", ge(0), 0.0);
   c.contact.skin = R.number(ct, P, "skin", ge(0), 0.0);
   c.contact.zone = R.number(ct, P, "zone", ge(0), 0.0);
+  check_frictional_joints_have_contact(c, R);
 }
 
 // "parallel": what a run over several processes does beyond what one process does
@@ -229,8 +276,17 @@ void read_output(json& doc, Case& c, const Reader& R) {
                 "fragments", "checkpoint_every"});
   if (o.contains("monitors")) {
     json& arr = R.array(o, P, "monitors", false);
-    for (size_t i = 0; i < arr.size(); ++i)
-      c.monitors.push_back(R.string_value(arr[i], child(child(P, "monitors"), i)));
+    for (size_t i = 0; i < arr.size(); ++i) {
+      const std::string p = child(child(P, "monitors"), i);
+      const std::string m = R.string_value(arr[i], p);
+      const auto first = std::find(c.monitors.begin(), c.monitors.end(), m);
+      if (first != c.monitors.end()) {  // its history.csv columns would appear twice
+        const size_t j = static_cast<size_t>(first - c.monitors.begin());
+        R.fail(p, "monitor '" + m + "' is listed twice (also " + child(child(P, "monitors"), j) +
+                      "); each monitor gives its own history.csv columns: list it once");
+      }
+      c.monitors.push_back(m);
+    }
   }
   if (o.contains("history_interval") && o.contains("history_rows"))
     R.fail(P, "give either 'history_interval' or 'history_rows', not both");

@@ -309,6 +309,22 @@ json parse_text(const std::string& text, const std::string& src) {
   }
 }
 
+std::string duplicate_key(const std::string& text) {
+  KeyTracker tracker;
+  json::parser_callback_t cb = [&tracker](int, json::parse_event_t ev, json& parsed) -> bool {
+    return tracker.on_event(ev, parsed);
+  };
+  try {
+    const json parsed = json::parse(text, cb, /*allow_exceptions=*/true);
+    (void)parsed;
+  } catch (const DuplicateKey& d) {
+    return d.path;
+  } catch (const json::exception&) {
+    // not JSON: no key at all
+  }
+  return {};
+}
+
 void check_finite(const json& j, const std::string& path, const Reader& R) {
   if (j.is_number_float() && !std::isfinite(j.get<double>()))
     R.fail(path, "value is not a finite number");

@@ -131,6 +131,13 @@ void apply_override(json& doc, const std::string& ov, const Reader& R) {
 
   json value = parse_value(text, where, R);
   check_depth(value, R.src(), where + ": the value");
+  // the value's objects take each key once, as in a case file (json_reader.cpp, parse_text)
+  if (value.is_structured()) {
+    const std::string dup = duplicate_key(text);
+    if (!dup.empty())
+      throw InputError(R.src() + ": " + where + ": " + child(key, dup) +
+                       ": duplicate key (each key may appear once per object)");
+  }
   set_at(doc, segs, std::move(value), where, R);
 }
 
