@@ -88,6 +88,36 @@ TEST(Cli, RunWritesHistorySummaryAndSnapshots) {
   fs::remove(out + ".log");
 }
 
+// A run with progress on ends with its key results, taken from its summary, after the paths of its
+// outputs (issue 51, item 18: they were only inside summary.json); its summary's phases say they
+// are estimates (item 8).
+TEST(Cli, RunWithProgressEndsWithItsKeyResults) {
+  const std::string out = tmpdir("key_results");
+  ASSERT_EQ(run(std::string(FDEM_BINARY) + " run " + kBar + " --out " + out + " > " + out + ".log 2>&1"), 0)
+      << slurp(out + ".log");
+  const std::string log = slurp(out + ".log");
+  const size_t paths = log.find("  summary:   " + out + "/summary.json\n");
+  const size_t key = log.find("fdem: key results of bar:\n");
+  ASSERT_NE(paths, std::string::npos) << log;
+  ASSERT_NE(key, std::string::npos) << log;
+  EXPECT_LT(paths, key) << log;
+  // after the heading only its lines, to the end: the interfaces and fragments, the energies
+  const std::string tail = log.substr(key);
+  const auto s = nlohmann::json::parse(slurp(out + "/summary.json"));
+  const std::string failed =
+      "\n  interfaces: " + std::to_string(s["interfaces_failed"].get<long>()) + " failed";
+  const std::string fragments =
+      "; fragments: " + std::to_string(s["fragments"]["count"].get<long>()) + ", the largest ";
+  EXPECT_NE(tail.find(failed), std::string::npos) << tail;
+  EXPECT_NE(tail.find(fragments), std::string::npos) << tail;
+  EXPECT_NE(tail.find("\n  energy: external work "), std::string::npos) << tail;
+  std::stringstream lines(tail.substr(tail.find('\n') + 1));
+  for (std::string line; std::getline(lines, line);) EXPECT_EQ(line.rfind("  ", 0), 0u) << tail;
+  EXPECT_TRUE(s["phases"].value("estimated", false)) << s["phases"].dump();
+  fs::remove_all(out);
+  fs::remove(out + ".log");
+}
+
 TEST(Cli, CheckAcceptsGoodCaseAndRejectsBadOne) {
   const std::string dir = tmpdir("check");
   fs::create_directories(dir);

@@ -16,12 +16,23 @@ std::string fmt_time(double s) {
   return buf;
 }
 
-Progress::Progress(bool on, long step0, double t0)
-    : on_(on), tty_(isatty(fileno(stderr))), start_(Clock::now()), step0_(step0), t0_(t0) {}
+double time_left(double since, long steps, double done, double left) {
+  if (!(left > 1e-9)) return 0.0;  // (the loop ends at end_time (1 - 1e-12))
+  if (since < kPaceSeconds || steps < kPaceSteps || !(done > 0)) return NAN;
+  return since * left / done;
+}
+
+Progress::Progress(bool on, long step0, double /*t0*/)
+    : on_(on), tty_(isatty(fileno(stderr))), start_(Clock::now()), step0_(step0) {}
 
 void Progress::update(long step, double t, double end_time, bool force) {
   if (!on_) return;
   const auto now = Clock::now();
+  if (first_step_ < 0) {  // (whether a line is due or not)
+    first_ = now;
+    first_step_ = step;
+    first_t_ = t;
+  }
   const double wall = std::chrono::duration<double>(now - start_).count();
   const double since = std::chrono::duration<double>(now - last_).count();
   const double frac = end_time > 0 ? t / end_time : 0;
@@ -31,8 +42,9 @@ void Progress::update(long step, double t, double end_time, bool force) {
   last_ = now;
   last_decile_ = decile;
   const double rate = wall > 0 ? (step - step0_) / wall : 0;
-  const double done = end_time > 0 ? (t - t0_) / end_time : 0;
-  const double eta = done > 0 ? wall * (1 - frac) / done : NAN;
+  const double paced = std::chrono::duration<double>(now - first_).count();
+  const double eta =
+      end_time > 0 ? time_left(paced, step - first_step_, (t - first_t_) / end_time, 1 - frac) : NAN;
   std::fprintf(stderr, "%sstep %ld  t = %.4e s (%5.1f %%)  %.3g steps/s  elapsed %s  left %s%s",
                tty_ ? "\r" : "", step, t, 100 * frac, rate, fmt_time(wall).c_str(),
                fmt_time(eta).c_str(), tty_ ? "   " : "\n");

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "common/kernel_times.hpp"
@@ -46,6 +47,21 @@ nlohmann::json stable_report(const Simulation<D>& sim) {
 template nlohmann::json stable_report(const Simulation<2>& sim);
 template nlohmann::json stable_report(const Simulation<3>& sim);
 
+namespace {
+
+// What summary.json's phases are: the seconds of the phases done on every step
+// are estimates, which can sum to more than the loop's wall time.
+std::string phases_note(const PhaseTimes& p) {
+  if (p.timed <= 0) return "no step was timed";
+  if (p.timed >= p.steps) return "measured on every step";
+  return "estimated from " + std::to_string(p.timed) + " timed steps of " + std::to_string(p.steps) +
+         ": forces, platens, contact and nodes are their mean over the timed (sampled) steps times "
+         "every step, the ledger (sampled steps only) as measured; a timed step waits for each "
+         "phase's kernels and sums the energies, so total_seconds can exceed loop_wall_seconds";
+}
+
+}  // namespace
+
 // The phases of every step estimated from the timed (sampled) steps: their mean per step times the
 // number of steps; the ledger's work is done on sampled steps only, its time is the measured one.
 nlohmann::json phases_report(const PhaseTimes& p) {
@@ -63,6 +79,8 @@ nlohmann::json phases_report(const PhaseTimes& p) {
   j["total_seconds"] = total;
   j["steps"] = p.steps;
   j["timed_steps"] = p.timed;
+  j["estimated"] = p.timed > 0 && p.timed < p.steps;
+  j["note"] = phases_note(p);
   return j;
 }
 
@@ -264,6 +282,119 @@ template nlohmann::json processes_report(const Case&, const Simulation<2>&, cons
 template nlohmann::json processes_report(const Case&, const Simulation<3>&, const CutHistory&,
                                          std::chrono::steady_clock::time_point, double);
 
+namespace {
+
+// j[key] as a number into v (false when j is no object or holds no number there).
+bool number(const nlohmann::json& j, const char* key, double& v) {
+  if (!j.is_object()) return false;
+  const auto it = j.find(key);
+  if (it == j.end() || !it->is_number()) return false;
+  v = it->get<double>();
+  return true;
+}
+
+const nlohmann::json& member(const nlohmann::json& j, const char* key) {
+  static const nlohmann::json kNull;
+  if (!j.is_object()) return kNull;
+  const auto it = j.find(key);
+  return it == j.end() ? kNull : *it;
+}
+
+// v with 4 significant digits ("%.4g"), or with `decimals` after the point ("%.*f").
+std::string g4(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+std::string fixed(double v, int decimals) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+// The parts joined by sep.
+std::string joined(const std::vector<std::string>& parts, const char* sep) {
+  std::string s;
+  for (const std::string& p : parts) s += (s.empty() ? "" : sep) + p;
+  return s;
+}
+
+// The strength (a disc between platens) and the peak load of every platen.
+std::string key_load_lines(const nlohmann::json& results) {
+  std::string text;
+  double v = 0, peak = 0;
+  if (number(results, "tensile_strength_Pa", v)) {
+    text += "  tensile strength " + g4(v / 1e6) + " MPa";
+    if (number(results, "peak_load_N", peak)) text += " (2 P / (pi D L) of the peak load " + g4(peak) + " N)";
+    text += "\n";
+  }
+  const nlohmann::json& platens = member(results, "platens");
+  std::vector<std::string> peaks;
+  if (platens.is_object())
+    for (auto it = platens.begin(); it != platens.end(); ++it) {
+      if (!number(*it, "peak_load_N", peak)) continue;
+      peaks.push_back(it.key() + " " + g4(peak) + " N");
+      if (number(*it, "displacement_at_peak_m", v)) peaks.back() += " at " + g4(1e3 * v) + " mm";
+    }
+  if (!peaks.empty()) text += "  peak load: " + joined(peaks, ", ") + "\n";
+  return text;
+}
+
+// Failed and damaged interfaces, the fragments and the largest one, the bodies broken.
+std::string key_fracture_line(const nlohmann::json& summary) {
+  std::vector<std::string> parts;
+  double n = 0, failed = 0, v = 0;
+  if (number(member(summary, "counts"), "interfaces", n) && n > 0 &&
+      number(summary, "interfaces_failed", failed)) {
+    parts.push_back("interfaces: " + fixed(failed, 0) + " failed");
+    if (number(summary, "interfaces_damaged", v)) parts.back() += ", " + fixed(v, 0) + " damaged";
+    parts.back() += " of " + fixed(n, 0);
+  }
+  const nlohmann::json& frag = member(summary, "fragments");
+  if (number(frag, "count", n)) {
+    parts.push_back("fragments: " + fixed(n, 0));
+    if (number(frag, "largest_fraction", v))
+      parts.back() += ", the largest " + fixed(100 * v, 1) + " % of the mass";
+    const nlohmann::json& bodies = member(frag, "per_body");
+    if (number(bodies, "bodies", n) && number(bodies, "broken", v))
+      parts.push_back(fixed(v, 0) + " of " + fixed(n, 0) + " bodies broken");
+  }
+  return parts.empty() ? "" : "  " + joined(parts, "; ") + "\n";
+}
+
+// The main energies and how well they balanced.
+std::string key_energy_line(const nlohmann::json& energy) {
+  std::vector<std::string> terms;
+  const char* names[][2] = {
+      {"external_work_J", "external work"}, {"fracture_J", "fracture"}, {"kinetic_J", "kinetic"}};
+  double v = 0;
+  for (const auto& t : names)
+    if (number(energy, t[0], v)) terms.push_back(std::string(t[1]) + " " + g4(v) + " J");
+  std::vector<std::string> parts;
+  if (!terms.empty()) parts.push_back(joined(terms, ", "));
+  if (number(energy, "max_relative_balance_error", v)) {
+    parts.push_back("balance error at most " + g4(100 * v) + " % of the energy scale");
+    double limit = 0, at = 0;
+    if (number(member(energy, "warning"), "time_s", at) && number(energy, "warning_threshold", limit))
+      parts.back() += " (above the " + g4(100 * limit) + " % warning from t = " + g4(at) + " s)";
+  }
+  return parts.empty() ? "" : "  energy: " + joined(parts, "; ") + "\n";
+}
+
+}  // namespace
+
+std::string key_results(const nlohmann::json& summary) {
+  const nlohmann::json& name = member(summary, "case");
+  const bool stopped = member(summary, "stop_reason") == "interrupted";  // (a restart goes on)
+  std::string text = "fdem: key results" + (name.is_string() ? " of " + name.get<std::string>() : "") +
+                     (stopped ? " so far (interrupted)" : "") + ":\n";
+  text += key_load_lines(member(summary, "results"));
+  text += key_fracture_line(summary);
+  text += key_energy_line(member(summary, "energy"));
+  return text;
+}
+
 void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress) {
   if (progress) {
     std::fprintf(stderr, "fdem: %ld steps in %.1f s (%.3g element-steps/s); stopped by %s\n", steps,
@@ -275,6 +406,10 @@ void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps
   std::printf("  history:   %s/history.csv\n  summary:   %s/summary.json\n", out, out);
   if (r.snapshots) std::printf("  snapshots: %s/snapshots.xdmf (open in ParaView)\n", out);
   std::fflush(stdout);
+  if (progress) {  // the result the run was for, as the last lines (after the paths)
+    std::fputs(key_results(summary).c_str(), stderr);
+    std::fflush(stderr);
+  }
 }
 
 }  // namespace fdem

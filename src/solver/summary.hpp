@@ -22,7 +22,8 @@ nlohmann::json mesh_report(const HostMesh& mesh);
 template <int D>
 nlohmann::json stable_report(const Simulation<D>& sim);
 
-// Wall time of each phase of the time step in this process (seconds and share of their sum).
+// Wall time of each phase of the time step in this process (seconds and share of their sum),
+// estimated from the timed (sampled) steps: "estimated" and "note" say so.
 nlohmann::json phases_report(const PhaseTimes& p);
 
 // What the run loop knows at the end besides the simulation, its history and fragments.
@@ -55,8 +56,13 @@ template <int D>
 nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const CutHistory& cuts,
                                 std::chrono::steady_clock::time_point loop_start, double cut_setup);
 
+// The key results of a run from its summary (nothing else): a heading, then the strength or the
+// platens' peak loads, the failed interfaces and the fragments, the energies and their balance,
+// each of what the summary holds; lines that end in '\n'.
+std::string key_results(const nlohmann::json& summary);
+
 // The closing lines: steps and throughput on stderr (with progress on), where the results are
-// on stdout.
+// on stdout, then (with progress on) key_results on stderr, the last lines a person sees.
 void print_run_end(const nlohmann::json& summary, const RunRecord& r, long steps, bool progress);
 
 }  // namespace fdem
