@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <string>
 
@@ -202,6 +203,76 @@ TEST(Grains, BoxTessellationFillsTheBoxAndItsMeshKeepsTheMineralVolumes) {
               g.cells.size(), m.num_elems(), q.min_angle_deg, q.min_size / s.element_size);
   EXPECT_GT(q.min_angle_deg, 3.0);
   EXPECT_GT(q.min_size, 0.05 * s.element_size);
+}
+
+// A mineral that gets no grain (its fraction under one grain of the specimen's) is refused by the
+// generator, naming its key and what to do; it was reported as an unknown region in `regions`
+// when the case gave it a material, and passed without a word when it did not.
+TEST(Grains, MineralWithoutAGrainIsNamed) {
+  fdem::MeshSpec s = disc_spec(1);
+  s.radius = 0.02;
+  s.grain_size = 0.008;
+  s.element_size = 0.002;
+  s.minerals = {{"quartz", 0.999}, {"mica", 0.001}};  // about 25 grains: none is mica
+  std::string e = "<no error>";
+  try {
+    fdem::tessellate_grains(s);
+  } catch (const fdem::InputError& err) {
+    e = err.what();
+  }
+  for (const char* part : {"grains generator: mesh.minerals.mica: no grain is 'mica'", "fraction 0.001",
+                           "give a grain_size below 0.00126", "about 1000 grains", "or remove 'mica'"})
+    EXPECT_NE(e.find(part), std::string::npos) << part << " in: " << e;
+  // in 3D as well; and a fraction that no grain count within the limit can honour
+  fdem::MeshSpec b;
+  b.kind = "grains";
+  b.shape = "box";
+  b.size = {0.02, 0.02, 0.02};
+  b.grain_size = 0.008;
+  b.element_size = 0.003;
+  b.seed = 1;
+  b.minerals = {{"a", 0.99999}, {"b", 0.00001}};
+  e = "<no error>";
+  try {
+    fdem::tessellate_grains_3d(b);
+  } catch (const fdem::InputError& err) {
+    e = err.what();
+  }
+  EXPECT_NE(e.find("mesh.minerals.b: no grain is 'b'"), std::string::npos) << e;
+  EXPECT_NE(e.find("no grain_size gives it one within the limit of 20000 grains: remove 'b'"),
+            std::string::npos)
+      << e;
+}
+
+// The bounds the messages give are possible ones: a huge grain_size gave "a grain_size below 0 m",
+// an element_size whose double overflows "(allowed: >= inf)"; a specimen whose area underflows
+// is named as such.
+TEST(Grains, MessagesGivePossibleBounds) {
+  auto error = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const fdem::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  };
+  fdem::MeshSpec s = disc_spec(1);
+  s.grain_size = 1e200;
+  std::string e = error([&] { fdem::tessellate_grains(s); });
+  EXPECT_NE(e.find("give a grain_size below 0.0353553 m (at least 2 grains)"), std::string::npos) << e;
+  s = disc_spec(1);
+  s.shape = "rectangle";
+  s.size = {1e-200, 1e-200, 0};
+  s.grain_size = 1e-200;
+  s.element_size = 1e-201;
+  e = error([&] { fdem::tessellate_grains(s); });
+  EXPECT_NE(e.find("the specimen's area is 0 m^2, beyond double precision"), std::string::npos) << e;
+  json d = json::parse(R"({"name": "g", "dimension": 2, "time": {"end_time": 1e-3},
+    "mesh": {"generator": "grains", "shape": "disc", "radius": 0.02, "grain_size": 0.01, "element_size": 1e308},
+    "materials": {"rock": {"density": 2700, "E": 3e10, "nu": 0.2}}, "regions": {"body": "rock"}})");
+  e = error([&] { fdem::parse_case(d, "t.json", {}); });
+  EXPECT_NE(e.find("mesh.element_size: value 1e+308 leaves no grain_size"), std::string::npos) << e;
+  EXPECT_EQ(e.find("inf"), std::string::npos) << e;
 }
 
 TEST(Grains, CaseReaderNamesBadKeys) {

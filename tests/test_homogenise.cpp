@@ -3,6 +3,7 @@
 // (cases/uniaxial_compression/README.md) with interfaces, and the report's fits.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -10,6 +11,7 @@
 #include <fstream>
 #include <string>
 
+#include "common/error.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/homogenise.hpp"
 #include "solver_fixtures.hpp"
@@ -91,6 +93,66 @@ TEST(EffectiveModuli, CrossedMeshWithInterfacesFollowsItsClosedForm) {
     expect_rel(-r.compliance[0][1] / r.compliance[0][0], lat, 1e-6, "lateral / axial");
     EXPECT_LT(j["E_over_bulk_E"].get<double>(), 1.0);
   }
+}
+
+// Very stiff interfaces (Robustness III, item 6): from kn h / E about 1e5 on the solver stalled
+// ("did not converge", residuals below 1e-6 printed as 0.000000), and at kn = 1e25 on another
+// mesh it stopped with E = 1.0017 times the bulk's. Now every stiffness up to 1e30 converges,
+// follows the closed form to 1e-6 (springs beyond what double precision resolves are solved at
+// the largest ratio it does, 1e7 times the bulk at their nodes, which the report counts and says:
+// E = (1 - 2.2e-7) E_bulk for kn = 1e25) and never gives an E above the bulk's.
+TEST(EffectiveModuli, StiffInterfacesConvergeAndNeverStiffenTheMesh) {
+  const double E = 72e9, nu = 0.2, d = 2.5e-3;
+  const int nx = 16, ny = 12;
+  for (double k : {1e17, 1e19, 1e21, 1e23, 1e25, 1e27, 1e30}) {
+    fdem::Case c = fdem_test::basic_case(2, E, nu);
+    c.interface_materials = {fdem_test::strong_interface(k, k)};
+    c.fracture_material = 0;
+    c.fracturable_regions = {"body"};
+    fdem::HostMesh m = fdem::generate_crossed_rectangle(0, 0, nx * d, ny * d, nx, ny);
+    fdem::insert_interfaces(m, {true});
+    EffectiveModuli r;
+    ASSERT_NO_THROW(r = fdem::effective_moduli(c, m)) << "kn " << k;
+    const double Ex = 1 / ((1 - nu * nu) / E + (1 / d) * ((nx - 1.0) / nx / k + 2 / k / std::sqrt(2.0)));
+    const nlohmann::json j = fdem::effective_moduli_report(c, r);
+    std::printf(
+        "kn %.0e: E_x %.12g (closed form %.12g), E / bulk E %.15g, %d iterations, residual %.2g "
+        "(rounding %.2g), stiffest spring %.3g times the bulk, %ld capped\n",
+        k, 1 / r.compliance[0][0], Ex, j["E_over_bulk_E"].get<double>(), r.iterations, r.residual, r.rounding,
+        r.max_spring_ratio, r.capped_springs);
+    expect_rel(1 / r.compliance[0][0], Ex, 1e-6, "E_x");
+    EXPECT_LE(j["E_over_bulk_E"].get<double>(), 1.0) << "kn " << k;
+    // the residual: 1e-8 of the load, or at the level of rounding in the stiff springs' forces
+    EXPECT_LE(r.residual, std::max(1e-8, 16 * r.rounding)) << "kn " << k;
+    EXPECT_EQ(r.capped_springs > 0, j["solver"].contains("note")) << "kn " << k;
+    if (k >= 1e25) {
+      EXPECT_GT(r.capped_springs, 0) << "kn " << k;
+    }
+  }
+}
+
+// A mesh whose pieces are held by nothing (frictional joints everywhere: the inner elements get
+// no load, the outer ones an unbalanced one) has no static equilibrium: said at once, with the
+// share of the load that is unbalanced as a number, where the solver ran 20 iterations per
+// unknown and stopped with "did not converge" (residuals below 1e-6 printed as 0.000000).
+TEST(EffectiveModuli, UnbalancedPieceIsNamed) {
+  fdem::Case c = fdem_test::basic_case(2, 72e9, 0.2);
+  fdem::InterfaceMaterial joint = fdem_test::strong_interface(1e14, 1e14);
+  joint.ft = joint.c = 0;  // frictional: carries nothing
+  c.interface_materials = {joint};
+  c.fracture_material = 0;
+  c.fracturable_regions = {"body"};
+  fdem::HostMesh m = fdem::generate_crossed_rectangle(0, 0, 0.01, 0.0075, 4, 3);
+  fdem::insert_interfaces(m, {true});
+  std::string what;
+  try {
+    fdem::effective_moduli(c, m);
+  } catch (const fdem::InputError& e) {
+    what = e.what();
+  }
+  EXPECT_NE(what.find("held by nothing but contact"), std::string::npos) << what;
+  EXPECT_NE(what.find("carries an unbalanced load (0."), std::string::npos) << what;
+  EXPECT_EQ(what.find("0.000000"), std::string::npos) << what;
 }
 
 // `fdem check --moduli` reports the same moduli for a case file (the uniaxial case's material and

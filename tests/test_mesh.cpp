@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <numeric>
@@ -741,6 +742,56 @@ TEST(MeshGenerators, SphereVolumeSets) {
   }
   EXPECT_EQ(s.node_sets.at("all").size(), static_cast<std::size_t>(s.num_nodes()));
   check_boundary_outward(s, {1, 0, -1});
+}
+
+// The sphere generator: a sphere coarse against its radius (element_size 0.6 R, over a tenth of
+// its bounding box's diagonal, 0.35 R) gets the asked element size, not a finer one (it had a
+// mean edge of 0.69 h). Gmsh's mean edge on a sphere is 1.1 to 1.3 h at any size (1.29 h at
+// h = 0.2 R, which the fix does not touch).
+TEST(MeshGenerators, SphereHonoursACoarseElementSize) {
+  const double R = 0.005, h = 0.6 * R;
+  const HostMesh m = fdem::generate_sphere({0, 0, 0}, R, h);
+  const double mean = fdem::mesh_quality(m).mean_size;
+  EXPECT_GT(mean, 0.85 * h) << m.num_elems() << " elements";
+  EXPECT_LT(mean, 1.3 * h) << m.num_elems() << " elements";
+}
+
+// The memory check's bound is a possible element size: a tiny one made the estimated count
+// overflow and the message said "give mesh.element_size >= inf m".
+TEST(MeshBuild, MemoryRefusalGivesAFiniteBound) {
+  const char* old = std::getenv("FDEM_MEMORY_LIMIT_GB");
+  const std::string saved = old ? old : "";
+  setenv("FDEM_MEMORY_LIMIT_GB", "1", 1);
+  std::vector<fdem::MeshSpec> specs(3);
+  specs[0].kind = "disc";
+  specs[0].radius = 0.02;
+  specs[1].kind = "rectangle";
+  specs[1].size = {0.02, 0.01, 0};
+  specs[2].kind = "grains";
+  specs[2].shape = "rectangle";
+  specs[2].size = {0.02, 0.01, 0};
+  specs[2].grain_size = 0.004;
+  for (auto& s : specs) {
+    s.element_size = 1e-300;
+    std::string e = "<no error>";
+    try {
+      fdem::build_mesh(s, 2);
+    } catch (const fdem::InputError& err) {
+      e = err.what();
+    }
+    EXPECT_NE(e.find("give mesh.element_size >= "), std::string::npos) << s.kind << ": " << e;
+    EXPECT_EQ(e.find(" inf"), std::string::npos) << s.kind << ": " << e;  // nor "about inf elements"
+    const std::size_t at = e.find("give mesh.element_size >= ");
+    if (at != std::string::npos) {  // about sqrt(c area / (1 GB / 2700 B)): 1e-5 to 1e-4 m
+      const double bound = std::stod(e.substr(at + 26));
+      EXPECT_GT(bound, 1e-7) << s.kind << ": " << e;
+      EXPECT_LT(bound, 1e-3) << s.kind << ": " << e;
+    }
+  }
+  if (old)
+    setenv("FDEM_MEMORY_LIMIT_GB", saved.c_str(), 1);
+  else
+    unsetenv("FDEM_MEMORY_LIMIT_GB");
 }
 
 TEST(MeshGenerators, BadArguments) {

@@ -1,6 +1,7 @@
 // Case schema, first part: mesh, analysis, materials and regions, interface materials and fracture.
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <system_error>
@@ -94,6 +95,10 @@ void read_grains_generator(json& m, MeshSpec& s, int d, const Reader& R) {
     R.fail(child(P, "shape"), "unknown shape '" + s.shape + "' (allowed: disc, rectangle)");
   }
   s.element_size = R.number(m, P, "element_size", gt(0));
+  if (!std::isfinite(2 * s.element_size))  // no grain_size is twice it ("allowed: >= inf")
+    R.fail(child(P, "element_size"), "value " + fmt_num(s.element_size) +
+                                         " leaves no grain_size (a grain needs grain_size >= 2 element_size): "
+                                         "give an element_size of at most half the grain_size");
   s.grain_size = R.number(m, P, "grain_size", ge(2 * s.element_size));
   s.seed = static_cast<unsigned long>(R.integer(m, P, "seed", 0, 4294967295L, 1));
   if (m.contains("mesher")) {  // 3D only, not written when absent
@@ -241,6 +246,10 @@ void read_scatter(json& f, Case& c, const Reader& R) {
   if (sc.distribution == "weibull") {
     sc.modulus = R.number(s, p, "modulus", between(0.5, false, 1000, false));
     if (s.contains("cov")) R.fail(p + ".cov", "is for the normal distribution (weibull takes 'modulus')");
+    for (const char* key : {"lower", "upper"})  // a Weibull factor is not truncated
+      if (s.contains(key))
+        R.fail(child(p, key),
+               "is for the normal distribution (weibull takes 'modulus' only; its factor is not truncated)");
   } else if (sc.distribution == "normal") {
     sc.cov = R.number(s, p, "cov", between(0, true, 1, false));
     sc.lower = R.number(s, p, "lower", between(0, true, 1, true), 0.1);

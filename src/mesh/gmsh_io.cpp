@@ -192,9 +192,15 @@ HostMesh read_gmsh(const std::string& path, int dim, double element_size) {
 
 namespace {
 
+// The element size is h alone, whatever else the session holds. The generators set no size on
+// their points, and Gmsh gives such a point a tenth of the session's bounding-box diagonal when
+// sizes come from points: finer than h for a model under 10 h across (a particle meshed alone
+// in its batch had elements 1.8 times finer than one meshed with others), so sizes from points
+// are off. Curvature sizes are off as well; the size spreads from the boundary into the volume.
 void set_mesh_size(double h, int algorithm3d) {
   gmsh::option::setNumber("Mesh.CharacteristicLengthMin", 0.0);
   gmsh::option::setNumber("Mesh.CharacteristicLengthMax", h);
+  gmsh::option::setNumber("Mesh.CharacteristicLengthFromPoints", 0);
   gmsh::option::setNumber("Mesh.CharacteristicLengthFromCurvature", 0);
   gmsh::option::setNumber("Mesh.CharacteristicLengthExtendFromBoundary", 1);
   // Delaunay: less regular than Frontal-Delaunay, whose rows of nearly aligned edges steer cracks

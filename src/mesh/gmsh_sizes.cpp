@@ -124,7 +124,7 @@ void refuse_oversized_geo(const std::string& path, int dim, double element_size)
   if (element_size > 0)  // at least this many: the file's own sizes can only be smaller
     check_fits_in_memory(estimate_gmsh_elements(dim, measure, element_size), dim,
                          "mesh.element_size = " + fmt(element_size) + " m for " + path + " (" + what + ")",
-                         element_size);
+                         element_size, "mesh.element_size", estimate_gmsh_elements(dim, measure, 1.0));
   const double floor = diag * 1e-5;
   const MeshMeasure lines = trial_mesh(1, floor, element_size > 0 ? std::max(element_size, floor) : 1e22);
   if (lines.count == 0) return;

@@ -324,7 +324,7 @@ GrainTessellation tessellate_grains(const MeshSpec& s) {
     }
     g.area[c] = a;
   }
-  grain_detail::assign_minerals(g.area, s, g.mineral, g.minerals, g.mineral_area);
+  grain_detail::assign_minerals(g.area, s, who, g.mineral, g.minerals, g.mineral_area);
   return g;
 }
 

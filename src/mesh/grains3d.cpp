@@ -263,7 +263,7 @@ GrainTessellation3 tessellate_grains_3d(const MeshSpec& s) {
     }
     g.volume.push_back(v);
   }
-  grain_detail::assign_minerals(g.volume, s, g.mineral, g.minerals, g.mineral_volume);
+  grain_detail::assign_minerals(g.volume, s, who, g.mineral, g.minerals, g.mineral_volume);
   return g;
 }
 

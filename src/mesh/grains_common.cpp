@@ -1,6 +1,9 @@
 // Seeds and minerals of the grain generators (src/mesh/grains_internal.hpp).
+#include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <string>
+#include <utility>
 
 #include "common/error.hpp"
 #include "mesh/grains_internal.hpp"
@@ -10,20 +13,60 @@ namespace fdem::grain_detail {
 
 using mesh_detail::fmt;
 
+namespace {
+
+// "give a grain_size <relation> D m (<what>)": the grain size D that puts `grains` grains in a
+// specimen of this area (2D) or volume (3D), from the measure alone (a bound scaled from the given
+// grain size came out as 0 m when that one was huge); a measure that is zero or not finite has no
+// such size, and the text says so.
+std::string grain_size_for(int dim, double measure, double grains, const std::string& relation,
+                           const std::string& what) {
+  const double pi = 3.14159265358979323846;
+  const double unit = dim == 2 ? 0.25 * pi : pi / 6;  // a grain's measure over d^dim
+  const double d = std::pow(measure / (grains * unit), dim == 2 ? 0.5 : 1.0 / 3.0);
+  if (d > 0 && std::isfinite(d)) return "give a grain_size " + relation + " " + fmt(d) + " m (" + what + ")";
+  const std::string m = dim == 2 ? "area " + fmt(measure) + " m^2" : "volume " + fmt(measure) + " m^3";
+  return "no grain_size gives " + what + ": the specimen's " + m +
+         " is beyond double precision; give a specimen of ordinary size";
+}
+
+// A mineral that got no grain: its fraction is under about one grain of the specimen's, and the
+// other minerals took its share. An error, not a warning: the specimen would lack a phase the case
+// asks for (and the mineral's regions entry would name a region the mesh does not have).
+[[noreturn]] void no_grain_of(const std::pair<std::string, double>& mineral, std::size_t grains,
+                              double measure, int dim, const std::string& who) {
+  const std::string& name = mineral.first;
+  // grains for about one of this mineral (twice as many where it missed out with more)
+  const double f = mineral.second, need = std::max(std::ceil(1 / f), 2.0 * static_cast<double>(grains));
+  const std::string fix = need <= 20000
+                              ? grain_size_for(dim, measure, need, "below",
+                                               "about " + fmt(need) + " grains, enough for '" + name +
+                                                   "'; element_size at most half of it") +
+                                    ", or remove"
+                              : "no grain_size gives it one within the limit of 20000 grains: remove";
+  throw InputError(who + ": mesh.minerals." + name + ": no grain is '" + name + "': its fraction " + fmt(f) +
+                   " of the " + std::to_string(grains) + " grains is " +
+                   fmt(f * static_cast<double>(grains)) + " grain, which the other minerals took; " + fix +
+                   " '" + name + "' from mesh.minerals (and from regions)");
+}
+
+}  // namespace
+
 std::vector<std::array<double, 3>> draw_seeds(
     int dim, const double lo[3], const double hi[3], double measure, double d, std::uint64_t seed,
     const std::string& who, const std::function<bool(const std::array<double, 3>&)>& inside) {
+  if (!(measure > 0) || !std::isfinite(measure))
+    throw InputError(who + ": the specimen's " + (dim == 2 ? "area is " : "volume is ") + fmt(measure) +
+                     (dim == 2 ? " m^2" : " m^3") + ", beyond double precision: give it an ordinary size");
   const double pi = 3.14159265358979323846;
   const double one = dim == 2 ? 0.25 * pi * d * d : pi * d * d * d / 6;  // a circle's area, a sphere's volume
   const double n_target = measure / one;
-  const double root = dim == 2 ? 0.5 : 1.0 / 3.0;
-  if (n_target < 1.5)
+  if (!(n_target >= 1.5))  // also a grain_size so large that `one` overflows: n_target 0
     throw InputError(who + ": the specimen holds " + fmt(n_target) + " grains of grain_size " + fmt(d) +
-                     " m; give a grain_size below " + fmt(d * std::pow(n_target / 2, root)) +
-                     " m (at least 2 grains)");
+                     " m; " + grain_size_for(dim, measure, 2, "below", "at least 2 grains"));
   if (n_target > 20000)
-    throw InputError(who + ": the specimen would hold " + fmt(n_target) + " grains (limit 20000); give a " +
-                     "grain_size of at least " + fmt(d * std::pow(n_target / 20000, root)) + " m");
+    throw InputError(who + ": the specimen would hold " + fmt(n_target) + " grains (limit 20000); " +
+                     grain_size_for(dim, measure, 20000, "of at least", "at most 20000 grains"));
   const int n = static_cast<int>(std::lround(n_target));
   const double rmin2 = 0.25 * d * d;  // seeds at least half a grain size apart
   Stream rng(seed);
@@ -51,8 +94,9 @@ std::vector<std::array<double, 3>> draw_seeds(
   return s;
 }
 
-void assign_minerals(const std::vector<double>& measure, const MeshSpec& spec, std::vector<int>& mineral,
-                     std::vector<std::string>& names, std::vector<double>& mineral_measure) {
+void assign_minerals(const std::vector<double>& measure, const MeshSpec& spec, const std::string& who,
+                     std::vector<int>& mineral, std::vector<std::string>& names,
+                     std::vector<double>& mineral_measure) {
   std::vector<std::pair<std::string, double>> mins = spec.minerals;
   if (mins.empty()) mins.push_back({spec.region.empty() ? std::string("body") : spec.region, 1.0});
   const size_t ng = measure.size();
@@ -80,6 +124,8 @@ void assign_minerals(const std::vector<double>& measure, const MeshSpec& spec, s
     mineral[c] = static_cast<int>(best);
     mineral_measure[best] += measure[c];
   }
+  for (size_t m = 0; m < mins.size(); ++m)
+    if (!(mineral_measure[m] > 0)) no_grain_of(mins[m], ng, total, spec.shape == "box" ? 3 : 2, who);
 }
 
 }  // namespace fdem::grain_detail

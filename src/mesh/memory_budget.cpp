@@ -145,7 +145,7 @@ double max_elements(int dim) {
 }
 
 void check_fits_in_memory(double elements, int dim, const std::string& request, double size,
-                          const std::string& size_key) {
+                          const std::string& size_key, double at_unit_size) {
   if (checks_off()) return;
   const MemoryBudget b = available_memory();
   if (!(b.bytes > 0)) return;
@@ -153,11 +153,23 @@ void check_fits_in_memory(double elements, int dim, const std::string& request, 
   const double need = elements * per;
   if (need <= b.bytes && std::isfinite(need)) return;
   const double cap = b.bytes / per;
-  std::string msg = request + " would make about " + num(elements) + " elements, which need about " +
-                    gib(need) + " (" + num(per) + " bytes per element over a run); " + gib(b.bytes) +
-                    " is available (" + b.source + "), enough for about " + num(cap) + " elements";
-  if (size > 0 && std::isfinite(size) && elements > 0)
-    msg += ": give " + size_key + " >= " + num(size * std::pow(elements / cap, 1.0 / dim)) + " m";
+  const std::string count = std::isfinite(elements)
+                                ? "about " + num(elements) + " elements, which need about " + gib(need)
+                                : std::string("more elements than a double counts");
+  std::string msg = request + " would make " + count + " (" + num(per) + " bytes per element over a run); " +
+                    gib(b.bytes) + " is available (" + b.source + "), enough for about " + num(cap) +
+                    " elements";
+  if (size > 0 && std::isfinite(size) && elements > 0) {
+    double smallest = size * std::pow(elements / cap, 1.0 / dim);
+    if (!std::isfinite(smallest) && at_unit_size > 0)  // elements overflowed at this size
+      smallest = std::pow(at_unit_size / cap, 1.0 / dim);
+    if (smallest > 0 && std::isfinite(smallest))
+      msg += ": give " + size_key + " >= " + num(smallest) + " m";
+    else if (at_unit_size > 0)  // the model's measure itself overflows
+      msg += ": no " + size_key + " makes it fit: the model is beyond double precision";
+    else
+      msg += ": give a far larger " + size_key + " (this one's count overflows a double)";
+  }
   msg += " (FDEM_MEMORY_CHECK=off skips this check)";
   throw InputError(msg);
 }

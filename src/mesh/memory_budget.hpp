@@ -32,8 +32,10 @@ double max_elements(int dim);
 // Throws InputError when `elements` elements (dimension dim) cannot fit in the available memory.
 // `request` names what asked for them (e.g. "mesh.element_size = 1e-05 m (4 x 5000 x 10000
 // cells)"); `size` > 0: the element size that gives them, so that the message can state the
-// smallest size that fits, under the name `size_key`.
+// smallest size that fits, under the name `size_key`; where a tiny size makes `elements` overflow
+// (it said "give mesh.element_size >= inf m"), from `at_unit_size` if given: the count at size 1
+// (elements times size^dim); the message says when no size fits.
 void check_fits_in_memory(double elements, int dim, const std::string& request, double size = 0,
-                          const std::string& size_key = "mesh.element_size");
+                          const std::string& size_key = "mesh.element_size", double at_unit_size = 0);
 
 }  // namespace fdem

@@ -400,7 +400,8 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double cy = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
     const double n[2] = {cx, cy};
     check_fits_in_memory(4.0 * cx * cy, 2, block_request(spec, n, 2),
-                         spec.cells[0] > 0 ? 0.0 : spec.element_size);
+                         spec.cells[0] > 0 ? 0.0 : spec.element_size, "mesh.element_size",
+                         4.0 * spec.size[0] * spec.size[1]);
     const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
     const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
     return generate_crossed_rectangle(spec.origin[0], spec.origin[1], spec.size[0], spec.size[1],
@@ -413,7 +414,8 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double cz = cells_for(spec.kind, "z", spec.cells[2], spec.size[2], spec.element_size);
     const double n[3] = {cx, cy, cz};
     check_fits_in_memory(6.0 * cx * cy * cz, 3, block_request(spec, n, 3),
-                         spec.cells[0] > 0 ? 0.0 : spec.element_size);
+                         spec.cells[0] > 0 ? 0.0 : spec.element_size, "mesh.element_size",
+                         6.0 * spec.size[0] * spec.size[1] * spec.size[2]);
     const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
     const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
     const int nz = to_cells(spec.kind, "z", cz, spec.size[2], spec.element_size);
@@ -424,7 +426,8 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
     if (R > 0 && h > 0 && h <= R)
       check_fits_in_memory(estimate_gmsh_elements(2, pi * R * R, h), 2,
-                           "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m)", h);
+                           "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m)", h,
+                           "mesh.element_size", estimate_gmsh_elements(2, pi * R * R, 1.0));
     return generate_disc(spec.origin[0], spec.origin[1], spec.radius, spec.element_size, region,
                          spec.diameter[0], spec.diameter[1], spec.symmetric);
   }
@@ -433,7 +436,8 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
     if (R > 0 && h > 0 && h <= R)
       check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h), 3,
-                           "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h);
+                           "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h,
+                           "mesh.element_size", estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, 1.0));
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
   }
   if (spec.kind == "particles") {  // many particles, each its own body (particles.cpp)
@@ -447,7 +451,8 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
                                                   : spec.size[0] * spec.size[1];
     if (h > 0 && measure > 0)
       check_fits_in_memory(estimate_gmsh_elements(dim, measure, h), dim,
-                           "mesh.element_size = " + fmt(h) + " m (grains)", h);
+                           "mesh.element_size = " + fmt(h) + " m (grains)", h, "mesh.element_size",
+                           estimate_gmsh_elements(dim, measure, 1.0));
     return dim == 3 ? generate_grains_3d(spec) : generate_grains(spec);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +

@@ -380,7 +380,8 @@ HostMesh generate_particles(const ParticleSpec& s, double h, const std::string& 
     throw InputError(who + ": radius / element_size = " + fmt(s.rmax / h) +
                      " is above the limit 200: give mesh.element_size >= " + fmt(s.rmax / 200));
   check_fits_in_memory(estimate_gmsh_elements(3, vsolid, h), 3,
-                       "mesh.element_size = " + fmt(h) + " m (" + std::to_string(s.count) + " particles)", h);
+                       "mesh.element_size = " + fmt(h) + " m (" + std::to_string(s.count) + " particles)", h,
+                       "mesh.element_size", estimate_gmsh_elements(3, vsolid, 1.0));
   const std::string rname = region.empty() ? std::string("particles") : region;
   // Batches of s.batch particles, one Gmsh session each: Gmsh's 3D meshing of one volume takes
   // time in proportion to the whole model, so one session for all N particles costs O(N^2)
