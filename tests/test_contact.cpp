@@ -344,9 +344,10 @@ TEST(ContactBroadPhase, FindsEveryPairWithinTheSearchDistance3D) { broad_phase_t
 // contact: normal force K_n A w ge with the depth ge = g0 kept while w falls and shrunk as w rises
 // so that the normal energy does not grow (ge <- ge sqrt(w_old / w_new)); the shear force scaled
 // with w while it falls and kept while it rises, then F_s <- clip(F_s - K_s A w du, mu F_n + c A w).
-// The dissipation (the spring energy lost to the change of w, and while slipping the spring's
-// energy before minus after plus the work of du against the mean of the old and new shear
-// forces) and the stored energy must match the same rule.
+// The dissipation (the spring energy lost to the change of w: the shear spring's, and the normal
+// spring's 0.5 K_n A (w_old - w) ge^2 while w falls; and while slipping the spring's energy before
+// minus after plus the work of du against the mean of the old and new shear forces) and the
+// stored energy must match the same rule.
 TEST(ContactStickSlip, ShearForceFollowsTheCoulombRuleExactly) {
   const double d = 0.01, h = 0.01, kn = 1e12, ks = 4e11, mu = 0.5, coh = 1e4, g0 = 1e-7;
   auto c = fdem_test::basic_case(2, 1e9, 0.25, 2500);
@@ -425,6 +426,8 @@ TEST(ContactStickSlip, ShearForceFollowsTheCoulombRuleExactly) {
       if (w[k] > wo) {  // the weight rises: the normal energy may not grow with it
         ge[k] *= std::sqrt(wo / w[k]);
         ++rises;
+      } else {  // it falls at the same depth: the normal spring's energy is released
+        diss += 2 * 0.5 * kn * (Awo - Aw) * ge[k] * ge[k];
       }
       // the shear spring shrinks with a falling weight and keeps its force with a rising one;
       // either way the energy it loses is released

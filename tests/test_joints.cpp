@@ -285,6 +285,66 @@ void check_frictional_joint(int dim) {
   std::filesystem::remove_all(dir);
 }
 
+// A frictionless joint (ft = c = phi = 0) under load slides: the upper block of joint_square.geo,
+// pressed down by 2e5 N and pushed sideways by 1.5e4 N on its top (the lower block fixed), slides
+// about 5 mm. The nodes at the block's ends slide off the edge of the face they press on; their
+// contacts' weights fade out while compressed, releasing sigma_n^2 / (2 K_n) per unit area that
+// slides off (4.85 J here, 4.1 % of the energy scale, when it was not booked): D_friction books it,
+// and the balance closes (measured 0.003 %).
+TEST(Joints, FrictionlessJointSlidingOffItsEdgeKeepsTheBalance2D) {
+  const std::string dir = fdem::test::scratch_dir("joints", "frictionless_slide");
+  json doc = json::parse(R"({
+    "name": "frictionless_slide", "dimension": 2, "analysis": {"plane": "strain", "thickness": 1.0},
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
+    "regions": {"lower": "rock", "upper": "rock"},
+    "interface_materials": {"joint_if": {"kn": 1e10, "ks": 1e10, "ft": 0, "c": 0, "phi_deg": 0}},
+    "fracture": {"regions": [], "interface_material": "joint_if", "surfaces": {"joint": "joint_if"}},
+    "boundary": {"fixed": [{"set": "region.lower"}],
+                 "point_loads": [{"set": "top", "force": [1.5e4, -2e5], "ramp_time": 2e-4}]},
+    "damping": {"local": 0}, "time": {"end_time": 3e-3, "safety_factor": 0.5},
+    "output": {"history_rows": 300, "snapshot_count": 0, "monitors": ["region.upper"]}
+  })");
+  doc["mesh"] = {{"file", data("joint_square.geo")}};
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.json") << doc.dump(2);
+  const int st = fdem::test::system_status("env OMP_NUM_THREADS=1 OMP_PROC_BIND=false " +
+                                           std::string(FDEM_BINARY) + " run " + dir + "/case.json --out " +
+                                           dir + "/out --quiet > " + dir + "/run.log 2>&1");
+  ASSERT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+  std::istringstream in(fdem::test::slurp(dir + "/out/history.csv"));
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> cols;
+  {
+    std::istringstream h(line);
+    for (std::string s; std::getline(h, s, ',');) cols.push_back(s);
+  }
+  auto col = [&](const std::string& name) {
+    const long i = std::find(cols.begin(), cols.end(), name) - cols.begin();
+    EXPECT_LT(i, static_cast<long>(cols.size())) << name;
+    return i;
+  };
+  const long iw = col("W_external [J]"), ie = col("energy_error [J]"), idf = col("D_friction [J]"),
+             iu = col("region.upper_ux [m]");
+  double scale = 0, worst = 0;
+  std::vector<double> row;
+  while (std::getline(in, line)) {
+    row.clear();
+    std::istringstream r(line);
+    for (std::string s; std::getline(r, s, ',');) row.push_back(std::stod(s));
+    scale = std::max(scale, std::abs(row[iw]));
+    worst = std::max(worst, std::abs(row[ie]));
+  }
+  ASSERT_FALSE(row.empty());
+  std::printf(
+      "frictionless joint: slid %.3g m, D_friction %.4g J, worst balance error %.3g J (%.4f %% of %.4g J)\n",
+      row[iu], row[idf], worst, 100 * worst / scale, scale);
+  EXPECT_GT(row[iu], 5e-3);           // it slid past the ends' fade (0.1 mm) by far
+  EXPECT_GT(row[idf], 0.02 * scale);  // what the ends released (4.85 J of 119 J)
+  EXPECT_LT(worst, 1e-3 * scale);     // was 4.1 %
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Joints, DirectShearPeakIsCohesionPlusFriction2D) { check_cohesive_joint(2); }
 TEST(Joints, DirectShearPeakIsCohesionPlusFriction3D) { check_cohesive_joint(3); }
 TEST(Joints, FrictionalJointSlidesAtItsOwnFriction2D) { check_frictional_joint(2); }

@@ -338,7 +338,10 @@ struct ContactForcesFn {
   }
 
   // 4. the contacts; the energy a contact released as its weight fell may go to a related one
-  //    whose weight rises (a node moving from one face of a piece onto the next)
+  //    whose weight rises (a node moving from one face of a piece onto the next). What the
+  //    node's contacts release in all is dissipated: the weights and allowances change the
+  //    normal springs' energy at fixed positions, with no force doing work (a node sliding off
+  //    the edge of the face it presses on: its weight fades out while compressed).
   template <class Force>
   KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const double (&xs)[D],
                                        const double (&vs)[D], double Anode, ContactSums& sums) const {
@@ -355,6 +358,7 @@ struct ContactForcesFn {
       }
     }
     const bool listed = nrel <= kNear;
+    double moved = 0.0;  // energy the weight changes put into the normal springs (< 0: released)
     for (int t = 0; t < cnt; ++t) {
       const int j = sub[t];
       const int fc = P.face(j);
@@ -375,9 +379,21 @@ struct ContactForcesFn {
           }
         }
       }
+      // a contact (or one starting with a related one's energy) still within dpen of its face, not
+      // a free element's (its potential is continuous: the nearest face changes where two depths
+      // are equal): its spring energy at this gap with the last step's area and allowance, and
+      // after the update
+      const double ge_old = scr.g(j) - P.g0(j), ac_old = P.fn(j) > 0.0 ? P.ac(j) : 0.0;
+      const bool counts =
+          ge_old < 0.0 && scr.g(j) > -L.dpen && !(scr.phi(j) < 0.0) && (P.fn(j) > 0.0 || lim > 0.0);
       contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
                             sums);
+      if (counts) {
+        const double ge = scr.g(j) - P.g0(j);
+        moved += 0.5 * L.kn * (P.ac(j) * ge * ge - ac_old * ge_old * ge_old);
+      }
     }
+    if (moved < 0.0) sums.dissipated -= moved;
   }
 };
 
