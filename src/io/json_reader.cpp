@@ -309,20 +309,20 @@ json parse_text(const std::string& text, const std::string& src) {
   }
 }
 
-std::string duplicate_key(const std::string& text) {
+json parse_value_text(const std::string& text, std::string& dup) {
   KeyTracker tracker;
   json::parser_callback_t cb = [&tracker](int, json::parse_event_t ev, json& parsed) -> bool {
     return tracker.on_event(ev, parsed);
   };
+  dup.clear();
   try {
-    const json parsed = json::parse(text, cb, /*allow_exceptions=*/true);
-    (void)parsed;
+    return json::parse(text, cb, /*allow_exceptions=*/true);
   } catch (const DuplicateKey& d) {
-    return d.path;
+    dup = d.path;
   } catch (const json::exception&) {
-    // not JSON: no key at all
+    // not JSON
   }
-  return {};
+  return json(json::value_t::discarded);
 }
 
 void check_finite(const json& j, const std::string& path, const Reader& R) {

@@ -103,10 +103,12 @@ void check_depth(const json& j, const std::string& src, const std::string& what)
 // JSON text -> document: syntax errors with line/column, duplicate keys rejected (InputError).
 json parse_text(const std::string& text, const std::string& src);
 
-// The key path (inside the text) of the first key that appears twice in one object of the JSON
-// text, e.g. "kn" or "0.a"; "" when there is none or the text is not JSON. For --set values, which
-// are refused the same way as a case file's duplicate keys (io/overrides.cpp).
-std::string duplicate_key(const std::string& text);
+// JSON text -> value, as parse_text reads it (each object's keys tracked) but without throwing:
+// a discarded value when the text is not JSON (a number that overflows included), and in `dup`
+// the key path (inside the text) of the first key that appears twice in one object, e.g. "kn" or
+// "0.a" ("" when none does). For --set values, which are refused the same way as a case file's
+// duplicate keys (io/overrides.cpp).
+json parse_value_text(const std::string& text, std::string& dup);
 
 // Every number of the document must be finite.
 void check_finite(const json& j, const std::string& path, const Reader& R);

@@ -28,8 +28,13 @@ std::vector<std::string> split_key(const std::string& key) {
 }
 
 // The value text as JSON, or as a string when it is not JSON (a number that overflows is an error).
-json parse_value(const std::string& text, const std::string& where, const Reader& R) {
-  json value = json::parse(text, nullptr, /*allow_exceptions=*/false);
+json parse_value(const std::string& text, const std::string& key, const std::string& where, const Reader& R) {
+  std::string dup;
+  json value = parse_value_text(text, dup);
+  // the value's objects take each key once, as in a case file (json_reader.cpp, parse_text)
+  if (!dup.empty())
+    throw InputError(R.src() + ": " + where + ": " + child(key, dup) +
+                     ": duplicate key (each key may appear once per object)");
   if (value.is_discarded()) {
     // A number that overflows is an error, anything else that is not JSON is a string.
     char* end = nullptr;
@@ -129,15 +134,8 @@ void apply_override(json& doc, const std::string& ov, const Reader& R) {
       throw InputError(R.src() + ": " + where + ": empty key in '" + key +
                        "' (expected key.path=value, e.g. platens.0.velocity.1=-0.1)");
 
-  json value = parse_value(text, where, R);
+  json value = parse_value(text, key, where, R);
   check_depth(value, R.src(), where + ": the value");
-  // the value's objects take each key once, as in a case file (json_reader.cpp, parse_text)
-  if (value.is_structured()) {
-    const std::string dup = duplicate_key(text);
-    if (!dup.empty())
-      throw InputError(R.src() + ": " + where + ": " + child(key, dup) +
-                       ": duplicate key (each key may appear once per object)");
-  }
   set_at(doc, segs, std::move(value), where, R);
 }
 
