@@ -17,8 +17,10 @@ constexpr int kChunk =
 // Work item c of the force pass. fused (host backends): element chunk c and the interfaces whose
 // side A lies in it (Model::ichunk: one pass over the nodes, side A's positions and forces are
 // still in cache); else bulk chunks (c < nbc), then interface chunks. PerIface: the interfaces
-// take their own parameters (InterfaceData::params); else all take InterfaceData::coh.
-template <int D, bool PerIface>
+// take their own parameters (InterfaceData::params); else all take InterfaceData::coh. Fric: the
+// model has slip states (InterfaceData::islip): a point that has begun to soften reads and writes
+// its slip state too (the others never touch it).
+template <int D, bool PerIface, bool Fric>
 struct ForceKernel {
   Kokkos::View<double* [D]> x;
   ElementData<D> el;
@@ -41,31 +43,40 @@ struct ForceKernel {
   // Interface q: its history and, while it carries, its forces.
   template <class Acc>
   KOKKOS_INLINE_FUNCTION void interface(const int q, Acc& acc) const {
-    // Model::icontact: 1 once the interface carries nothing (handed over to contact: its faces are
-    // in contact instead; or, without contact, come apart for good: interface_apart).
+    // Model::icontact: nonzero once the interface carries nothing (handed over to contact: its
+    // faces are in contact instead; or, without contact, come apart for good: interface_apart).
     if (in.icontact(q)) return;
     const bool handover = in.contact_handover;
     double xa[D][D], xb[D][D], fa[D][D], fb[D][D];
     CohesivePoint h[D];
+    SlipPoint<D> sl[D];
     gather_interface<D>(x, in.iface, q, xa, xb);
-    for (int k = 0; k < D; ++k) h[k] = load_point(in.ihist, q, k);
+    for (int k = 0; k < D; ++k) {
+      h[k] = load_point(in.ihist, q, k);
+      sl[k] = Fric && h[k].dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
+    }
     const CohesiveParams p = PerIface ? in.params(q) : in.coh;
     if (interface_apart<D>(xa, xb, h)) {
-      interface_fail_all<D>(xa, xb, in.iarea(q), p, h);
-      for (int k = 0; k < D; ++k) store_point(in.ihist, q, k, h[k]);
+      interface_fail_all<D, Fric>(xa, xb, p, h, sl);
+      for (int k = 0; k < D; ++k) {
+        store_point(in.ihist, q, k, h[k]);
+        if (Fric) store_slip<D>(in.islip, q, k, sl[k]);
+      }
       if (handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
       else in.icontact(q) = 1;
       return;
     }
     CohesivePoint h0[D];
     for (int k = 0; k < D; ++k) h0[k] = h[k];
-    const double dmean = interface_forces<D>(xa, xb, in.iarea(q), p, h, fa, fb);
+    const double dmean = interface_forces<D, Fric>(xa, xb, in.iarea(q), p, h, sl, fa, fb);
     if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
       Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     for (int k = 0; k < D; ++k) {
       // the history is written only when the step changed it (most points of a run stay
-      // undamaged or unload: no write traffic for them)
+      // undamaged or unload: no write traffic for them); the slip state of a softening point
+      // (its slip follows the faces' every move)
       if (!same_point(h[k], h0[k])) store_point(in.ihist, q, k, h[k]);
+      if (Fric && h[k].dm0 > 0.0 && p.tanphir >= 0.0) store_slip<D>(in.islip, q, k, sl[k]);
       for (int i = 0; i < D; ++i) {
         acc(in.iface(q, k), i) += fa[k][i];
         acc(in.iface(q, D + k), i) += fb[k][i];
@@ -101,12 +112,13 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
   const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
   sf.reset();
   const Kokkos::RangePolicy<ExecSpace> policy(0, fused ? nbc : nbc + nic);
+  auto run = [&](auto kernel) { Kokkos::parallel_for("fdem::forces", policy, kernel); };
   if (m.per_interface()) {
-    const ForceKernel<D, true> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
-    Kokkos::parallel_for("fdem::forces", policy, kernel);
+    if (m.has_slip()) run(ForceKernel<D, true, true>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
+    else run(ForceKernel<D, true, false>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
   } else {
-    const ForceKernel<D, false> kernel{m.x, m.elements(), m.interfaces(), sf, nbc, fused};
-    Kokkos::parallel_for("fdem::forces", policy, kernel);
+    if (m.has_slip()) run(ForceKernel<D, false, true>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
+    else run(ForceKernel<D, false, false>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
   }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;

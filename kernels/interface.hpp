@@ -83,9 +83,12 @@ KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const doub
 // Fails every point of an interface that has come apart (interface_apart): a point that still
 // holds releases the elastic energy it stores at its present separation, booked as fracture
 // dissipation (its remaining fracture energy is never spent: the crack has run past it).
-template <int D>
-KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const double (&xb)[D][D], double ap,
-                                               const CohesiveParams& p, CohesivePoint (&h)[D]) {
+// Fric: a softening point's residual friction spring (interface_forces) releases its energy too,
+// booked as friction (sl.wf).
+template <int D, bool Fric = false>
+KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const double (&xb)[D][D],
+                                               const CohesiveParams& p, CohesivePoint (&h)[D],
+                                               SlipPoint<D> (&sl)[D]) {
   double n[D], ap_cur;
   interface_frame<D>(xa, xb, 1.0, n, ap_cur);
   for (int k = 0; k < D; ++k) {
@@ -97,7 +100,13 @@ KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const d
       dn += d[i] * n[i];
     }
     for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
-    h[k].wd += ap * cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);
+    h[k].wd += cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);  // per unit area, as wd
+    if constexpr (Fric) {
+      if (p.tanphir >= 0.0 && dmg > 0.0) {
+        double e[D];
+        sl[k].wf += 0.5 * p.ks * elastic_slip<D>(n, d, sl[k], e);
+      }
+    }
     if (!(h[k].dm0 > 0.0)) h[k].dm0 = 1e-300;  // never initiated: initiated now
     if (!(h[k].dmf > h[k].dm0)) h[k].dmf = 2.0 * h[k].dm0;
     h[k].dmax = h[k].dmax > h[k].dmf ? h[k].dmax : h[k].dmf;
@@ -127,17 +136,47 @@ KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const dou
   return open || slid;
 }
 
+// The residual friction of one softening point (interface_forces; friction_return, cohesive.hpp)
+// beside its cohesive shear traction of magnitude tc, its damage risen by dD in the step: the slip
+// step and its dissipation (sl.wf), the energy the damage moved into the spring taken off the
+// fracture dissipation (h.wd), and the forces of U_f = ap k_s |P (d - sp)|^2 / 2 added to the
+// point's (fa, fb) and to dU/dn (g): dU_f/dd = ap k_s e, dU_f/dn = -ap k_s (r . n) r with
+// r = d - sp = dn n + e.
+template <int D>
+KOKKOS_INLINE_FUNCTION void residual_friction(const CohesiveParams& p, const double (&n)[D], const double (&d)[D],
+                                              double dn, const double (&ds)[D], double ap, double tc, double dD,
+                                              CohesivePoint& h, SlipPoint<D>& sl, double (&fa)[D], double (&fb)[D],
+                                              double (&g)[D]) {
+  double e[D], moved;
+  sl.wf += friction_return<D>(p, n, d, dn, ds, tc, dD, sl, e, moved);
+  h.wd -= moved;
+  const double kf = ap * p.ks;
+  for (int i = 0; i < D; ++i) {
+    fa[i] += kf * e[i];
+    fb[i] -= kf * e[i];
+    g[i] -= kf * dn * (dn * n[i] + e[i]);
+  }
+}
+
 // Cohesive forces of one interface: updates the history of its points and returns the forces on
 // its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
 // point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
 // |delta_k - (delta_k . n) n|) at fixed damage, including the change of the normal n with the
 // nodes (it matters once faces have slid or opened far), so that the interface neither creates
 // nor loses energy.
-template <int D>
+// Fric (the model has slip states, Model::islip) and p.tanphir >= 0: a point that has begun to
+// soften (D > 0) also has its residual friction (residual_friction; docs/theory.md section 4): a
+// Coulomb spring k_s e that supplies what the softening cohesive traction (1 - D) k_s |delta_s|
+// no longer carries, up to sigma_n tan(phi_r), so that the shear resistance goes from the
+// Mohr-Coulomb peak down the paper's softening branch until it meets sigma_n tan(phi_r) and stays
+// there; psi gains k_s |e|^2 / 2 and the slip dissipates into sl.wf. The damage and its fracture
+// energy are the paper's law's. sl: the points' slip states (zero for a point that had not begun
+// to soften).
+template <int D, bool Fric = false>
 KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
                                                double ap, const CohesiveParams& p,
-                                               CohesivePoint (&h)[D], double (&fa)[D][D],
-                                               double (&fb)[D][D]) {
+                                               CohesivePoint (&h)[D], SlipPoint<D> (&sl)[D],
+                                               double (&fa)[D][D], double (&fb)[D][D]) {
   double n[D], ap_cur;
   interface_frame<D>(xa, xb, 1.0, n, ap_cur);
   double dsum = 0;
@@ -155,12 +194,17 @@ KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const d
       ds2 += ds[i] * ds[i];
     }
     double tn, kss, dmg;
+    const double dmg0 = Fric ? cohesive_damage(h[k]) : 0.0;
     cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
     dsum += dmg;
     for (int i = 0; i < D; ++i) {
       fa[k][i] = ap * (tn * n[i] + kss * ds[i]);
       fb[k][i] = -fa[k][i];
       g[i] += ap * (tn - kss * dn) * d[i];
+    }
+    if constexpr (Fric) {
+      if (p.tanphir >= 0.0 && dmg > 0.0)
+        residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, h[k], sl[k], fa[k], fb[k], g);
     }
   }
   // dU/dn -> forces through the mid-surface points m_k = (xa_k + xb_k) / 2.

@@ -96,6 +96,12 @@ struct InterfaceData {
   int owned_ifaces() const { return ni_own < 0 ? ni : ni_own; }
   Kokkos::View<int* [2 * D]> iface;
   Kokkos::View<double* [D][kPointHistory]> ihist;
+  // Per integration point, when some interface material has a residual friction
+  // (CohesiveParams::tanphir >= 0): its slip state (SlipPoint, kernels/cohesive.hpp; read and
+  // written through load_slip / store_slip), kept for the points that have begun to soften only
+  // (the others' is zero and never read). Empty otherwise.
+  Kokkos::View<double* [D][D + 1]> islip;
+  KOKKOS_INLINE_FUNCTION bool has_slip() const { return islip.extent(0) > 0; }
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
   // Host backends, interfaces ordered by their side-A element: first interface of each chunk of
   // kChunk elements (ceil(ne / kChunk) + 1 entries); the force kernel then does each element
@@ -120,6 +126,7 @@ struct InterfaceData {
     p.ft *= w / srf;
     p.c *= w / srf;
     p.tanphi /= srf;
+    if (p.tanphir > 0.0) p.tanphir /= srf;
     if (scale_energy) {
       p.Gnc *= w;
       p.Gsc *= w;
@@ -134,9 +141,11 @@ struct InterfaceData {
   Kokkos::View<int*> icontact;
   Kokkos::View<int> icontact_pending;
   // Per interface (extent ni) when some interface material is a frictional joint
-  // (InterfaceMaterial::frictional): its friction coefficient tan(phi), -1 for the others; empty
-  // otherwise. Those interfaces start failed and handed over (icontact = 1); the contact faces
-  // they leave take this friction (ContactSurface::fmu).
+  // (InterfaceMaterial::frictional) or has a residual friction: the friction
+  // coefficient of the contact faces it leaves once handed over (ContactSurface::fmu): a joint's
+  // tan(phi), a softening material's residual tan(phi_r); -1 for the others (the paper's law: the
+  // contact law's friction); empty otherwise. Frictional joints start failed and handed over
+  // (icontact = 1).
   Kokkos::View<double*> ifric;
   bool contact_handover = false;
   double handover_slip = 0;  // see interface_parted (kernels/interface.hpp)
@@ -179,6 +188,20 @@ KOKKOS_INLINE_FUNCTION void store_point(const HistView& ihist, int q, int k, con
   ihist(q, k, 1) = h.dm0;
   ihist(q, k, 2) = h.dmf;
   ihist(q, k, 3) = h.wd;
+}
+
+// The slip state of integration point k of interface q (Model::islip; SlipPoint, cohesive.hpp).
+template <int D, class SlipView>
+KOKKOS_INLINE_FUNCTION SlipPoint<D> load_slip(const SlipView& islip, int q, int k) {
+  SlipPoint<D> s;
+  for (int i = 0; i < D; ++i) s.sp[i] = islip(q, k, i);
+  s.wf = islip(q, k, D);
+  return s;
+}
+template <int D, class SlipView>
+KOKKOS_INLINE_FUNCTION void store_slip(const SlipView& islip, int q, int k, const SlipPoint<D>& s) {
+  for (int i = 0; i < D; ++i) islip(q, k, i) = s.sp[i];
+  islip(q, k, D) = s.wf;
 }
 
 // Whether two histories are the same bit for bit (a NaN compares unequal: it is written).

@@ -28,15 +28,17 @@ double strain_energy(const Model<D>& m) {
   return w;
 }
 
-// Sums over the interfaces: stored elastic energy, dissipated fracture energy, number damaged
+// Sums over the interfaces: stored elastic energy, dissipated fracture energy, energy dissipated by
+// the residual friction of softening points (kernels/cohesive.hpp, SlipPoint), number damaged
 // (some point with damage > 0) and failed (every point at damage 1). A parallel_reduce result
 // type in Kokkos 3.4.1 (volatile join) and 4.x (plain join).
 struct InterfaceSums {
-  double elastic = 0, fracture = 0, damaged = 0, failed = 0;
+  double elastic = 0, fracture = 0, friction = 0, damaged = 0, failed = 0;
   KOKKOS_INLINE_FUNCTION InterfaceSums() {}
   KOKKOS_INLINE_FUNCTION InterfaceSums& operator+=(const InterfaceSums& o) {
     elastic += o.elastic;
     fracture += o.fracture;
+    friction += o.friction;
     damaged += o.damaged;
     failed += o.failed;
     return *this;
@@ -45,6 +47,7 @@ struct InterfaceSums {
   KOKKOS_INLINE_FUNCTION void operator+=(const volatile InterfaceSums& o) volatile {
     elastic += o.elastic;
     fracture += o.fracture;
+    friction += o.friction;
     damaged += o.damaged;
     failed += o.failed;
   }
@@ -75,8 +78,15 @@ InterfaceSums interface_state(const Model<D>& m) {
           }
           for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
           const double dmg = cohesive_damage(h);
-          if (!handed) s.elastic += ap * cohesive_stored(in.params(q), dn, kmath::sqrt(ds2), dmg);
+          const CohesiveParams p = in.params(q);
+          if (!handed) s.elastic += ap * cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);
           s.fracture += ap * cohesive_dissipation(h);
+          if (in.has_slip() && h.dm0 > 0.0 && p.tanphir >= 0.0) {  // the residual friction
+            const SlipPoint<D> sl = load_slip<D>(in.islip, q, k);
+            double e[D];
+            if (!handed) s.elastic += ap * 0.5 * p.ks * elastic_slip<D>(n, d, sl, e);
+            s.friction += ap * sl.wf;
+          }
           any = any || dmg > 0.0;
           all = all && dmg >= 1.0;
         }

@@ -981,6 +981,30 @@ TEST(CaseErrors, WeibullScatterRefusesLowerAndUpper) {
   EXPECT_DOUBLE_EQ(c.scatter.upper, 2.0);
 }
 
+// The interface law and the residual friction (docs/case-format.md, interface_materials):
+// defaults, the paper's law, and the refusals naming the key and what is allowed.
+TEST(CaseErrors, InterfaceLawAndResidualFriction) {
+  json d = base_doc();
+  Case c = fdem::parse_case(d, "test.json");
+  EXPECT_FALSE(c.interface_materials[0].residual_friction);  // the paper's law, the default for now
+  EXPECT_DOUBLE_EQ(c.interface_materials[0].phi_r, c.interface_materials[0].phi);  // default phi
+  d["interface_materials"]["cif"]["phi_r_deg"] = 20;
+  d["interface_materials"]["cif"]["law"] = "residual_friction";
+  c = fdem::parse_case(d, "test.json");
+  EXPECT_TRUE(c.interface_materials[0].residual_friction);
+  EXPECT_NEAR(c.interface_materials[0].phi_r, 20 * M_PI / 180, 1e-15);
+  json e = d;
+  e["interface_materials"]["cif"]["law"] = "alfano";
+  EXPECT_HAS(error_of(e), "test.json: interface_materials.cif.law: 'alfano' is not a law (allowed: \"paper\", the default, or \"residual_friction\")");
+  e = d;
+  e["interface_materials"]["cif"]["phi_r_deg"] = 90;
+  EXPECT_HAS(error_of(e), "test.json: interface_materials.cif.phi_r_deg");
+  e = d;
+  e["interface_materials"]["cif"]["ft"] = 0;
+  e["interface_materials"]["cif"]["c"] = 0;
+  EXPECT_HAS(error_of(e), "test.json: interface_materials.cif.phi_r_deg: is for materials that soften");
+}
+
 // The same monitor twice would give history.csv the same columns twice.
 TEST(CaseErrors, MonitorListedTwiceIsRefused) {
   json d = base_doc();

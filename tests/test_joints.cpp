@@ -1,7 +1,8 @@
 // Joints and pre-existing cracks on named surfaces (docs/case-format.md, "fracture.surfaces"):
 // interfaces only on a Gmsh mesh's named curve or surface of an otherwise continuous body, with
 // one node copy per side (one at a crack tip); "region.<name>" node sets; the direct shear of a
-// joint, whose peak shear stress is c + sigma_n tan(phi).
+// joint, whose peak shear stress is c + sigma_n tan(phi) and whose residual one, from the peak
+// through the handover to contact, sigma_n tan(phi_r) (docs/theory.md section 4).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -235,7 +236,8 @@ std::vector<Stresses> direct_shear(int dim, const json& joint, double vx, double
 void check_cohesive_joint(int dim) {
   const std::string dir = fdem::test::scratch_dir("joints", "shear" + std::to_string(dim));
   const double c = 1e6, tanphi = std::tan(30 * M_PI / 180), k = 1e11, vx = 0.01;
-  const json joint = {{"kn", k}, {"ks", k}, {"ft", 1e6}, {"c", c}, {"phi_deg", 30}, {"Gnc", 1}, {"Gsc", 1}};
+  const json joint = {{"kn", k},  {"ks", k},  {"ft", 1e6}, {"c", c}, {"phi_deg", 30},
+                      {"Gnc", 1}, {"Gsc", 1}, {"law", "residual_friction"}};
   for (double s : {1e6, 2e6, 4e6}) {
     const double t_peak = (c + s * tanphi) / (k * vx);  // the slip and the closure at the peak
     const auto rows = direct_shear(dim, joint, vx, s / (k * t_peak), 1.3 * t_peak,
@@ -249,9 +251,158 @@ void check_cohesive_joint(int dim) {
         dim, p.sigma, p.tau, c + p.sigma * tanphi, 100 * (p.tau / (c + p.sigma * tanphi) - 1));
     EXPECT_NEAR(p.sigma, s, 0.02 * s);                       // the stress the test aims at
     EXPECT_NEAR(p.tau, c + p.sigma * tanphi, 0.01 * p.tau);  // Mohr-Coulomb peak within 1 %
-    EXPECT_LT(rows.back().tau, 0.01 * p.tau);                // failed: no shear until it slides by dpen
+    // failed: the joint slides at sigma_n tan(phi_r), phi_r = phi by default (the row's sigma_n:
+    // the closure goes on)
+    EXPECT_NEAR(rows.back().tau, rows.back().sigma * tanphi, 0.005 * rows.back().tau);
   }
   std::filesystem::remove_all(dir);
+}
+
+// The paper's law ("law": "paper"): a failed point carries no shear, so the joint that has just
+// failed carries none until it slides by dpen (its faces then go to contact).
+TEST(Joints, PaperLawCarriesNoShearOnceFailed2D) {
+  const std::string dir = fdem::test::scratch_dir("joints", "paper_law");
+  const double c = 1e6, tanphi = std::tan(30 * M_PI / 180), k = 1e11, vx = 0.01, s = 2e6;
+  const json joint = {{"kn", k},      {"ks", k},      {"ft", 1e6},      {"c", c},
+                      {"phi_deg", 30}, {"Gnc", 1}, {"Gsc", 1}, {"law", "paper"}};
+  const double t_peak = (c + s * tanphi) / (k * vx);
+  const auto rows = direct_shear(2, joint, vx, s / (k * t_peak), 1.3 * t_peak, dir);
+  ASSERT_FALSE(rows.empty());
+  const Stresses p = *std::max_element(rows.begin(), rows.end(),
+                                       [](const Stresses& a, const Stresses& b) { return a.tau < b.tau; });
+  EXPECT_NEAR(p.tau, c + p.sigma * tanphi, 0.01 * p.tau);
+  EXPECT_LT(rows.back().tau, 0.01 * p.tau);
+  std::filesystem::remove_all(dir);
+}
+
+// Direct shear at a constant normal stress, as a rock mechanics laboratory runs it: the lower
+// block fixed, the upper block driven sideways (x prescribed on all its nodes, the rest free)
+// under a point load on its top, ramped over 1 ms, while the drive ramps up over 4 ms to 0.1 m/s.
+// The joint (c 1.5 MPa, phi 33 degrees, phi_r given) peaks at c + sigma_n tan(phi), softens, and
+// slides at sigma_n tan(phi_r) through its handover to contact (at about 1.5 mm of slip: a
+// quarter of the thinnest element, plus the steps to the next poll). `body`: the blocks' own
+// interfaces (a strong material with phi 45 degrees, so that the contact law's default friction,
+// tan 45, is not the joint's) are inserted too. The history every row (E_interface, E_contact,
+// energy_error, W_external; shear and normal stress of the joint from the lower block's reactions).
+struct ShearRun {
+  std::vector<double> tau, sigma, e_interface, e_contact, error, work;
+};
+
+ShearRun constant_normal_shear(int dim, double sigma, double phi_r_deg, double end_time, bool body,
+                               const std::string& dir) {
+  json doc = json::parse(R"({
+    "name": "direct_shear_constant_normal",
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
+    "regions": {"lower": "rock", "upper": "rock"},
+    "interface_materials": {
+      "rock_if": {"kn": 1e11, "ks": 1e11, "ft": 5e6, "c": 10e6, "phi_deg": 45, "Gnc": 10, "Gsc": 100},
+      "joint_if": {"kn": 1e11, "ks": 1e11, "ft": 1e6, "c": 1.5e6, "phi_deg": 33, "Gnc": 10, "Gsc": 100}},
+    "fracture": {"regions": [], "interface_material": "rock_if", "surfaces": {"joint": "joint_if"}},
+    "damping": {"local": 0}
+  })");
+  doc["interface_materials"]["joint_if"]["phi_r_deg"] = phi_r_deg;
+  doc["interface_materials"]["joint_if"]["law"] = "residual_friction";
+  if (body) doc["fracture"]["regions"] = {"lower", "upper"};
+  doc["dimension"] = dim;
+  doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
+  if (dim == 2) doc["analysis"] = {{"plane", "strain"}, {"thickness", 1.0}};
+  const double area = dim == 2 ? 0.1 : 0.01;
+  const json drive = dim == 2 ? json::array({0.1, 0.0}) : json::array({0.1, 0.0, 0.0});
+  const json load = dim == 2 ? json::array({0.0, -sigma * area}) : json::array({0.0, 0.0, -sigma * area});
+  doc["boundary"] = {
+      {"fixed", {{{"set", "region.lower"}}}},
+      {"velocity", {{{"set", "region.upper"}, {"velocity", drive}, {"components", "x"}, {"ramp_time", 4e-3}}}},
+      {"point_loads", {{{"set", "top"}, {"force", load}, {"ramp_time", 1e-3}}}}};
+  doc["time"] = {{"end_time", end_time}, {"safety_factor", 0.5}};
+  doc["output"] = {{"history_rows", 4000}, {"snapshot_count", 0}};
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.json") << doc.dump(2);
+  const std::string env = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
+  const int st = fdem::test::system_status(env + FDEM_BINARY + " run " + dir + "/case.json --out " + dir +
+                                           "/out --quiet > " + dir + "/run.log 2>&1");
+  EXPECT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+  auto h = fdem::test::read_history(dir + "/out/history.csv");
+  ShearRun r;
+  const std::string nname = std::string("region.lower_reaction_") + (dim == 2 ? "y" : "z") + " [N]";
+  for (const char* name : {"region.lower_reaction_x [N]", "E_interface [J]", "E_contact [J]", "energy_error [J]",
+                           "W_external [J]"})
+    EXPECT_FALSE(h[name].empty()) << name;
+  EXPECT_FALSE(h[nname].empty()) << nname;
+  for (size_t i = 0; i < h[nname].size(); ++i) {
+    r.tau.push_back(std::abs(h["region.lower_reaction_x [N]"][i]) / area);
+    r.sigma.push_back(std::abs(h[nname][i]) / area);
+    r.e_interface.push_back(h["E_interface [J]"][i]);
+    r.e_contact.push_back(h["E_contact [J]"][i]);
+    r.error.push_back(h["energy_error [J]"][i]);
+    r.work.push_back(h["W_external [J]"][i]);
+  }
+  return r;
+}
+
+// From the peak to the end, tau / sigma_n never falls below tan(phi_r) by more than `dip` (over
+// windows of 10 history rows: 50 us, 5 um of slip; the lowest single row is printed as
+// "instantaneous"), and it is tan(phi_r) within `tol` just before the handover and at the end; the
+// balance holds within 1 % of the work throughout. The dip is the handover's (measured: none in
+// 2D; in 3D 0.9 % at 1.5 MPa and 1.6 % at 4 MPa, the single rows 6-7 %; in the 2D body of
+// interfaces 3 %): the contacts settle onto the faces the blocks have left under each other.
+void check_residual_friction(int dim, double sigma, double phi_r_deg, bool body, double tol, double dip,
+                             double end, const std::string& name) {
+  const std::string dir = fdem::test::scratch_dir("joints", name);
+  const double c = 1.5e6, tanphi = std::tan(33 * M_PI / 180), tanr = std::tan(phi_r_deg * M_PI / 180);
+  const ShearRun r = constant_normal_shear(dim, sigma, phi_r_deg, end, body, dir);
+  ASSERT_GT(r.tau.size(), 100u);
+  const size_t ip = std::max_element(r.tau.begin(), r.tau.end()) - r.tau.begin();
+  // handed over: the joint's interfaces store nothing, the contacts hold its compression
+  size_t ih = r.tau.size();
+  for (size_t i = ip; i < r.tau.size() && ih == r.tau.size(); ++i)
+    if (r.e_interface[i] == 0.0 && r.e_contact[i] > 0.0) ih = i;
+  if (body)  // the blocks' own interfaces keep storing energy: the contacts' appears
+    for (size_t i = ip; i < r.tau.size() && ih == r.tau.size(); ++i)
+      if (r.e_contact[i] > 0.0) ih = i;
+  const size_t w = 10;
+  double lowest = 1e9, instant = 1e9, worst = 0;
+  for (size_t i = ip; i + w <= r.tau.size(); ++i) {
+    double t = 0, sn = 0;
+    for (size_t j = i; j < i + w; ++j) {
+      t += r.tau[j];
+      sn += r.sigma[j];
+    }
+    lowest = std::min(lowest, t / sn);
+    instant = std::min(instant, r.tau[i] / r.sigma[i]);
+  }
+  for (size_t i = 0; i < r.tau.size(); ++i) worst = std::max(worst, std::abs(r.error[i]));
+  ASSERT_LT(ih, r.tau.size()) << "the joint was not handed over to contact";
+  const double before = r.tau[ih - 1] / r.sigma[ih - 1], after = r.tau.back() / r.sigma.back();
+  std::printf(
+      "direct shear %dD%s, sigma_n %.3g MPa: peak tau %.4g MPa (c + sigma_n tan(phi) %.4g), tau / sigma_n after "
+      "the peak: lowest %.4f (instantaneous %.4f), before the handover (row %zu) %.4f, at the end %.4f; "
+      "tan(phi_r) %.4f; worst balance error %.3g %% of the work\n",
+      dim, body ? " in a body of interfaces" : "", sigma / 1e6, r.tau[ip] / 1e6, (c + r.sigma[ip] * tanphi) / 1e6,
+      lowest, instant, ih, before, after, tanr, 100 * worst / r.work.back());
+  // the Mohr-Coulomb peak, within 3 %: sigma_n swings, and in 3D the points of the coarse joint do
+  // not all reach their peak together (the displacement-controlled test above checks it to 0.02 %)
+  EXPECT_NEAR(r.tau[ip], c + r.sigma[ip] * tanphi, 0.03 * r.tau[ip]);
+  EXPECT_GT(ih, ip + 10);
+  EXPECT_GT(lowest, tanr * (1 - dip));  // no window without friction at any slip
+  EXPECT_NEAR(before, tanr, tol * tanr);
+  EXPECT_NEAR(after, tanr, tol * tanr);
+  EXPECT_LT(worst, 0.01 * r.work.back());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Joints, CohesiveJointSlidesAtItsResidualFrictionThroughTheHandover2D) {
+  check_residual_friction(2, 1.5e6, 25, false, 0.005, 0.005, 0.02, "residual2_15");
+  check_residual_friction(2, 4e6, 25, false, 0.005, 0.005, 0.02, "residual2_40");
+}
+TEST(Joints, CohesiveJointSlidesAtItsResidualFrictionThroughTheHandover3D) {
+  check_residual_friction(3, 1.5e6, 25, false, 0.005, 0.02, 0.025, "residual3_15");
+  check_residual_friction(3, 4e6, 25, false, 0.005, 0.02, 0.025, "residual3_40");
+}
+// Inside a body whose own interfaces have phi 45 degrees (the contact law's default friction):
+// the joint keeps its own residual friction after the handover (within 1 %: the blocks, cut into
+// elements joined by interfaces, are softer, and the swings of the normal stress larger).
+TEST(Joints, JointInABodyOfOtherInterfacesKeepsItsOwnResidualFriction2D) {
+  check_residual_friction(2, 3e6, 33, true, 0.01, 0.035, 0.02, "residual_body");
 }
 
 // A purely frictional joint (ft = c = 0, phi = 35 degrees): handed over to contact from the

@@ -74,6 +74,10 @@ KOKKOS_INLINE_FUNCTION void contact_open(const ContactLaw& L, const Kokkos::View
 // Fric = false: frictionless contact (mu = 0 and no cohesion): the shear force is zero, so the
 // shear spring is neither computed nor stored (its history stays zero; see ContactSystem::update
 // for the switch from friction to none).
+// seed (or nullptr): a shear force added to the spring's before the step, the pair's share of an
+// interface handed over at this poll (HandoverSeed, kernels/contact/narrow_phase.hpp); the
+// energy the spring then stores beyond its own is booked against the seed's (the caller releases
+// the seed's energy).
 template <int D, bool Fric = true, class Force>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
                                          const Kokkos::View<double* [D]>& v,
@@ -81,7 +85,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
                                          const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
                                          const Kokkos::View<double* [D]>& pfs, int j, int s, int fc,
                                          const double (&xs)[D], const double (&vs)[D], double A, double limit,
-                                         double budget, double dt, ContactSums& sums) {
+                                         double budget, double dt, const double* seed, ContactSums& sums) {
   const bool was = pfn(j) > 0.0;
   double g0 = pg0(j);
   if (!(A > 0.0) && !(was || g0 < 0.0)) return;  // not in contact, nothing to update
@@ -124,7 +128,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
     double fs[D], dun = 0, fsn = 0, f2old = 0;
     for (int k = 0; k < D; ++k) {
       dun += du[k] * n[k];
-      fs[k] = was ? pfs(j, k) * scale : 0.0;
+      fs[k] = (was ? pfs(j, k) * scale : 0.0) + (seed ? seed[k] : 0.0);
       f2old += was ? pfs(j, k) * pfs(j, k) : 0.0;
       fsn += fs[k] * n[k];
     }
@@ -132,7 +136,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
     const bool joint = S.fmu.extent(0) > 0 && S.fmu(fc) >= 0.0;
     const FrictionLaw fl{L.ks, joint ? S.fmu(fc) / L.srf : L.mu, L.coh};
     const ShearStep<D> sh = coulomb_shear<D>(fl, n, A, Fn, fs, fsn, du, dun);
-    if (was) sums.dissipated += 0.5 * (f2old / pac(j) - sh.f2 / A) / L.ks;
+    if (was || seed) sums.dissipated += 0.5 * ((was ? f2old / pac(j) : 0.0) - sh.f2 / A) / L.ks;
     if (sh.slipped) sums.dissipated += sh.slip;
     for (int k = 0; k < D; ++k) Fs[k] = sh.Fs[k];
   }

@@ -8,6 +8,7 @@
 #include "kernels/contact/broad_phase.hpp"
 #include "kernels/contact/contact_pair.hpp"
 #include "kernels/contact/surfaces.hpp"
+#include "kernels/model.hpp"
 
 namespace fdem {
 
@@ -121,6 +122,89 @@ struct PairSubset {
   KOKKOS_INLINE_FUNCTION int operator[](int t) const { return n <= kList ? j[t] : b + t; }
 };
 
+// What the interfaces handed over at this poll (icontact kHandedNow, hand_over_failed) leave to
+// one of their nodes: its share of their compressive penalty's energy (un) and of their friction
+// springs' energy (us) and force (F, on the node): half of each point's at its node pair, as the
+// contacts of the node against the other side's faces carry half the load (the contacts of the
+// other side's nodes carry the rest). The node's contacts start from it (contacts, contact_pair):
+// a new contact may start as deep as un explains, a contact that grows takes un as budget, and
+// each contact's shear spring starts with its share of F; what they do not take is dissipated.
+// A node pair of which one node lies over none of its candidate faces (over_a_face; the end of a
+// joint whose blocks have slid past each other: the interface still paired the overhanging node
+// with the other block's last node) gives the whole point to the other node, so that the shear
+// force goes on; a spring that carries the two halves stores twice their energy
+// (the balance shows the difference: 0.01 % of the work in the 3D direct shear of
+// tests/test_joints.cpp).
+template <int D>
+struct HandoverSeed {
+  double un = 0, us = 0;
+  double F[D] = {};
+  bool any = false;
+};
+
+// Whether node s at p lies over one of its candidate faces (P) within dpen of it (its projection
+// within the face, to the contact's fade tolerance): whether it will find a contact.
+template <int D>
+KOKKOS_INLINE_FUNCTION bool over_a_face(const ContactSurface<D>& S, const PairList<D>& P, const ContactLaw& L, int s,
+                                        const double (&p)[D]) {
+  for (int j = P.off(s); j < P.off(s + 1); ++j) {
+    double n[D], N[D];
+    const double g = face_project_geo<D>(S.fgeo, S.fslot(P.face(j)), p, n, N);
+    double score = N[0];
+    for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
+    if (score > -L.tol && g > -L.dpen && g < L.dpen) return true;
+  }
+  return false;
+}
+
+template <int D>
+KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S, const PairList<D>& P,
+                                                     const ContactLaw& L, const InterfaceData<D>& in,
+                                                     const Kokkos::View<double* [D]>& x, int s) {
+  HandoverSeed<D> r;
+  for (int t = S.nfoff(s); t < S.nfoff(s + 1); ++t) {
+    const int q = S.fiface(S.nface(t));
+    if (q < 0 || in.icontact(q) != kHandedNow) continue;
+    int k = -1;
+    double side = 1.0;  // the force on the node: +F on side A's, -F on side B's
+    for (int a = 0; a < D; ++a) {
+      if (in.iface(q, a) == s) k = a;
+      if (in.iface(q, D + a) == s) {
+        k = a;
+        side = -1.0;
+      }
+    }
+    if (k < 0) continue;
+    double xa[D][D], xb[D][D], n[D], ap_cur, d[D], dn = 0;
+    gather_interface<D>(x, in.iface, q, xa, xb);
+    interface_frame<D>(xa, xb, 1.0, n, ap_cur);
+    for (int i = 0; i < D; ++i) {
+      d[i] = xb[k][i] - xa[k][i];
+      dn += d[i] * n[i];
+    }
+    // the node's share: half the point's, none when it lies over no face of its partner's side,
+    // all of it when its partner lies over none of its side's
+    const int partner = side > 0 ? in.iface(q, D + k) : in.iface(q, k);
+    double xs[D], xp[D];
+    for (int i = 0; i < D; ++i) {
+      xs[i] = x(s, i);
+      xp[i] = x(partner, i);
+    }
+    const double share = !over_a_face<D>(S, P, L, s, xs) ? 0.0 : over_a_face<D>(S, P, L, partner, xp) ? 0.5 : 1.0;
+    const CohesiveParams p = in.params(q);
+    const double ap = in.iarea(q);
+    r.any = true;
+    r.un += dn < 0.0 ? 0.5 * share * ap * p.kn * dn * dn : 0.0;
+    if (in.has_slip() && p.tanphir >= 0.0) {  // failed: the residual friction carries all the shear
+      double e[D];
+      const double e2 = elastic_slip<D>(n, d, load_slip<D>(in.islip, q, k), e);
+      r.us += 0.5 * share * share * 2.0 * ap * p.ks * e2;  // (share 1: one spring, twice the force)
+      for (int i = 0; i < D; ++i) r.F[i] += side * share * ap * p.ks * e[i];
+    }
+  }
+  return r;
+}
+
 // The narrow-phase pass over one surface node's candidates (see contact_forces): the weight of
 // every pair (weigh, share), what the weight changes release (release), then the contacts.
 // Scratch per pair: g gap, phi fade (< 0: a free element's face), n normal, w weight, depth the
@@ -144,6 +228,9 @@ struct ContactForcesFn {
   ContactLaw L;
   double dt;
   int nforce;  // the points from nforce on are only followed (displacement, speed): a part's ghosts
+  // the interfaces; seeding: some were handed over at this poll (their nodes' HandoverSeed)
+  InterfaceData<D> in;
+  bool seeding;
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const {
     auto f = scatter.access();
@@ -158,8 +245,12 @@ struct ContactForcesFn {
     sums.d2max = d2 > sums.d2max ? d2 : sums.d2max;
     sums.v2max = v2 > sums.v2max ? v2 : sums.v2max;
     if (i >= nforce) return;
+    const HandoverSeed<D> seed = seeding ? handover_seed<D>(S, P, L, in, x, s) : HandoverSeed<D>{};
     const int b = P.off(s), e = P.off(s + 1);
-    if (b == e) return;
+    if (b == e) {
+      sums.dissipated += seed.un + seed.us;  // no contact to take it
+      return;
+    }
     const double Anode = S.narea(s);
     Subset sub;
     sub.b = b;
@@ -171,7 +262,7 @@ struct ContactForcesFn {
     }
     share(sub);
     release(sub, Anode);
-    contacts(f, s, sub, xs, vs, Anode, sums);
+    contacts(f, s, sub, xs, vs, Anode, seed, sums);
   }
 
   // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's), with the
@@ -342,9 +433,19 @@ struct ContactForcesFn {
   //    node's contacts release in all is dissipated: the weights and allowances change the
   //    normal springs' energy at fixed positions, with no force doing work (a node sliding off
   //    the edge of the face it presses on: its weight fades out while compressed).
+  //    A node with a HandoverSeed: its new contacts may start as deep as the seed's un explains
+  //    over the node's area, its growing ones take their weight's share of un as budget, and each
+  //    contact's shear spring starts with its weight's share of F (cut so that the springs store
+  //    at most us); the seed is released here and what the contacts take is booked back.
   template <class Force>
   KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const double (&xs)[D],
-                                       const double (&vs)[D], double Anode, ContactSums& sums) const {
+                                       const double (&vs)[D], double Anode, const HandoverSeed<D>& seed,
+                                       ContactSums& sums) const {
+    const double seed_lim = seed.un > 0.0 ? kmath::sqrt(2.0 * seed.un / (L.kn * Anode)) : 0.0;
+    double seed_f[D], F2 = 0;
+    for (int k = 0; k < D; ++k) F2 += seed.F[k] * seed.F[k];
+    const double cs = F2 > 2.0 * L.ks * Anode * seed.us ? kmath::sqrt(2.0 * L.ks * Anode * seed.us / F2) : 1.0;
+    sums.dissipated += seed.us;
     // the pairs that release energy (rel > 0: contacts whose weight fell, a few per node), listed
     // as in share so that the budgets cost the releasing pairs, not all candidates
     int relj[kNear];
@@ -364,8 +465,9 @@ struct ContactForcesFn {
       const int fc = P.face(j);
       const double w = scr.w(j);
       if (!(w > 0.0) && !(P.fn(j) > 0.0) && !(P.g0(j) < 0.0)) continue;  // as contact_pair: nothing to do
-      const double lim = w > 0.0 && !(scr.depth(j) >= 0.0) ? related(sub, fc) / kmath::sqrt(Anode * w) : 0.0;
-      double budget = 0.0;
+      double lim = w > 0.0 && !(scr.depth(j) >= 0.0) ? related(sub, fc) / kmath::sqrt(Anode * w) : 0.0;
+      if (w > 0.0 && !(scr.depth(j) >= 0.0)) lim = lim > seed_lim ? lim : seed_lim;
+      double budget = w > 0.0 && scr.depth(j) >= 0.0 ? w * seed.un : 0.0;
       if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j) && nrel > 0) {
         if (listed) {
           for (int u = 0; u < nrel; ++u) {
@@ -386,13 +488,15 @@ struct ContactForcesFn {
       const double ge_old = scr.g(j) - P.g0(j), ac_old = P.fn(j) > 0.0 ? P.ac(j) : 0.0;
       const bool counts =
           ge_old < 0.0 && scr.g(j) > -L.dpen && !(scr.phi(j) < 0.0) && (P.fn(j) > 0.0 || lim > 0.0);
+      for (int k = 0; k < D; ++k) seed_f[k] = cs * w * seed.F[k];
       contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
-                            sums);
+                            seed.any ? seed_f : nullptr, sums);
       if (counts) {
         const double ge = scr.g(j) - P.g0(j);
         moved += 0.5 * L.kn * (P.ac(j) * ge * ge - ac_old * ge_old * ge_old);
       }
     }
+    moved -= seed.un;
     if (moved < 0.0) sums.dissipated -= moved;
   }
 };
@@ -451,12 +555,14 @@ struct BalancedPoints {
 // surface nodes); the others' displacements and speeds still count in the sums.
 // On host backends with several threads the points go to the threads in ranges of equal work
 // (BalancedPoints; scratch.work must then hold np + 1 entries, else the plain range runs).
+// seeding: interfaces were handed over at this poll (HandoverSeed).
 template <int D, bool Fric = true, int Cap = kSubsetCap>
 void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np, int nforce, const PairList<D>& P,
                     const PairScratch<D>& scratch, const ContactSurface<D>& surf, const ContactLaw& law,
                     double dt, const Kokkos::View<double* [D]>& xb, const ForceScatter<D>& sf,
-                    const Kokkos::View<ContactSums>& pass) {
-  const ContactForcesFn<D, Fric, Cap> fn{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt, nforce};
+                    const Kokkos::View<ContactSums>& pass, bool seeding) {
+  const ContactForcesFn<D, Fric, Cap> fn{m.x,  m.v, xb, sf,           points, P,      scratch,
+                                         surf, law, dt, nforce, m.interfaces(), seeding};
   const int nt = ExecSpace().concurrency();
   if (std::is_same<MemSpace, Kokkos::HostSpace>::value && nt > 1 && np > 0 &&
       static_cast<int>(scratch.work.extent(0)) > np) {

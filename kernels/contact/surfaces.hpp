@@ -266,8 +266,15 @@ void node_areas(const ContactSurface<D>& surf, int nn) {
       });
 }
 
+// Model::icontact of an interface handed over at this poll whose state passes to the contacts of
+// its nodes (the narrow phase's HandoverSeed, kernels/contact/narrow_phase.hpp); after that pass
+// it becomes 1 like every handed-over interface (clear_handover_marks).
+inline constexpr int kHandedNow = 2;
+
 // Hands every failed interface (damage 1 at all its points) that has parted or come apart over
-// to contact (m.icontact(q) = 1); ni: the number of interfaces. Returns how many. Clears the
+// to contact; ni: the number of interfaces. One that has parted gets m.icontact(q) = kHandedNow:
+// it still carried its compression and friction, which its nodes' contacts take over. One that
+// has come apart (interface_apart) carried nothing already: 1. Returns how many. Clears the
 // force kernel's flag m.icontact_pending (by a kernel: no copy to the device).
 template <int D>
 int hand_over_failed(const Model<D>& m, int ni) {
@@ -293,8 +300,9 @@ int hand_over_failed(const Model<D>& m, int ni) {
           }
         CohesivePoint h[D];
         for (int k = 0; k < D; ++k) h[k] = load_point(ihist, q, k);
-        if (interface_parted<D>(xa, xb, slip) || interface_apart<D>(xa, xb, h)) {
-          icontact(q) = 1;
+        const bool apart = interface_apart<D>(xa, xb, h);
+        if (apart || interface_parted<D>(xa, xb, slip)) {
+          icontact(q) = apart ? 1 : kHandedNow;
           ++cnt;
         }
       },
@@ -305,6 +313,16 @@ int hand_over_failed(const Model<D>& m, int ni) {
         "fdem::contact::pending_clear", Kokkos::RangePolicy<ExecSpace>(0, 1),
         KOKKOS_LAMBDA(const int) { pending() = 0; });
   return n;
+}
+
+// After the narrow pass that took their state over: the interfaces handed over at this poll are
+// handed over like any other (icontact 1).
+inline void clear_handover_marks(const Kokkos::View<int*>& icontact_in, int ni) {
+  auto icontact = icontact_in;
+  Kokkos::parallel_for(
+      "fdem::contact::handover_marks", Kokkos::RangePolicy<ExecSpace>(0, ni), KOKKOS_LAMBDA(const int q) {
+        if (icontact(q) == kHandedNow) icontact(q) = 1;
+      });
 }
 
 }  // namespace fdem

@@ -30,6 +30,15 @@ struct InterfaceMaterial {
   double phi = 0;           // rad (file: phi_deg)
   double Gnc = 0, Gsc = 0;  // N/m
   double eta = 2.0;         // Benzeggagh-Kenane exponent
+  // The law while a point softens and once it has failed (file: law): "residual_friction", a
+  // point that has begun to soften keeps a Coulomb friction that takes up what the softening
+  // cohesion no longer carries, up to the residual sigma_n tan(phi_r) (phi_r: file phi_r_deg,
+  // default phi_deg), or "paper", the paper's law (no friction while a point softens, none once it
+  // has failed), the default until the shipped cases have been compared under both
+  // (docs/validation.md). The contact faces such an interface leaves take tan(phi_r) too (with
+  // "paper", the contact law's friction).
+  bool residual_friction = false;
+  double phi_r = 0;  // rad
   // No tension and no cohesion: a purely frictional joint. Its interfaces are failed and handed
   // over to contact from the start; contacts on their faces take the friction tan(phi).
   bool frictional() const { return ft == 0 && c == 0; }

@@ -379,7 +379,7 @@ void read_interfaces(json& doc, Case& c, const Reader& R) {
   for (auto it = ims.begin(); it != ims.end(); ++it) {
     const std::string p = child("interface_materials", it.key());
     if (!valid_name(it.key())) R.fail(p, "'" + it.key() + "' is not a valid material name");
-    R.keys(*it, p, {"kn", "ks", "ft", "c", "phi_deg", "Gnc", "Gsc", "eta"});
+    R.keys(*it, p, {"kn", "ks", "ft", "c", "phi_deg", "phi_r_deg", "law", "Gnc", "Gsc", "eta"});
     InterfaceMaterial m;
     m.name = it.key();
     m.kn = R.number(*it, p, "kn", gt(0));
@@ -392,6 +392,13 @@ void read_interfaces(json& doc, Case& c, const Reader& R) {
     m.Gnc = R.number(*it, p, "Gnc", gt(0), unused);
     m.Gsc = R.number(*it, p, "Gsc", gt(0), unused);
     m.eta = R.number(*it, p, "eta", gt(0), 2.0);
+    if (m.frictional() && it->contains("phi_r_deg"))
+      R.fail(child(p, "phi_r_deg"), "is for materials that soften: a frictional joint (ft = c = 0) slides at phi_deg");
+    m.phi_r = R.number(*it, p, "phi_r_deg", between(0, false, 90, true), m.phi * 180.0 / kPi) * kPi / 180.0;
+    const std::string law = R.string(*it, p, "law", std::string("paper"));
+    if (law != "residual_friction" && law != "paper")
+      R.fail(child(p, "law"), "'" + law + "' is not a law (allowed: \"paper\", the default, or \"residual_friction\")");
+    m.residual_friction = law == "residual_friction";
     c.interface_materials.push_back(m);
   }
   if (doc.contains("fracture")) read_fracture(doc, c, R);

@@ -43,10 +43,11 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   // candidate lists by a local search (update_lists; docs/performance-impact.md section 2). On
   // GPUs the check also costs a copy of the pending flag to the host.
   check_every_ = kContactPollEvery;
-  if (m.ifric.extent(0) > 0) {  // frictional joints, handed over from the start: their own friction
+  if (m.ifric.extent(0) > 0) {  // the faces of interfaces take their own friction (Model::ifric)
     surf_.fmu = Kokkos::View<double*>("fdem::contact::fmu", nf_);
     joint_friction_ = joint_face_friction<D>(surf_, m.ifric, nf_) > 0;
-    may_meet_ = true;  // the pieces they separate may meet
+    // frictional joints, handed over from the start: the pieces they separate may meet
+    may_meet_ = may_meet_ || count_handed(m.icontact, ni_) > 0;
   }
   refresh_surfaces(m);
 }
@@ -221,6 +222,7 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
   ++checks_;
   if (n == 0) return;
   handed_ += n;
+  seeding_ = true;  // the next narrow pass takes their state (HandoverSeed)
   // the lists are valid and the build positions known for every node: a local update will do
   const bool lists = may_meet_ && !need_build_ && xb_all_ && builds_ > 0 && ns_ > 0 && na_ > 0;
   if (lists) {
@@ -342,6 +344,7 @@ void ContactSystem<D>::reserve_pairs(PairList<D>& P, int cap) {
 
 template <int D>
 void ContactSystem<D>::update(const Model<D>& m, double dt) {
+  poll(m);
   if (own_scatter_size_ != m.f.extent(0)) {
     own_scatter_ = Scatter(m.f);
     own_scatter_size_ = m.f.extent(0);
@@ -353,7 +356,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
 }
 
 template <int D>
-void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
+void ContactSystem<D>::poll(const Model<D>& m) {
   // (a part polls on the same steps as every other part, with or without interfaces of its own:
   // the parts agree on what changed there, Simulation::step)
   polled_ = false;
@@ -367,7 +370,17 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
     }
     if (pending) check_failures(m);
   }
-  if (!may_meet_ || ns_ == 0 || na_ == 0) return;
+}
+
+template <int D>
+void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
+  // after this step's pass the interfaces handed over at its poll are like the others
+  const bool seeding = seeding_;
+  seeding_ = false;
+  if (!may_meet_ || ns_ == 0 || na_ == 0) {
+    if (seeding) clear_handover_marks(m.icontact, ni_);
+    return;
+  }
   if (!need_build_ && until_recheck_ <= 0) recheck(dt);
   if (need_build_) {
     build(m);
@@ -383,7 +396,8 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   friction_before_ = fric || !skip_frictionless;
   const auto pass = small_subsets ? (full ? &contact_forces<D, true, 1> : &contact_forces<D, false, 1>)
                                   : (full ? &contact_forces<D, true> : &contact_forces<D, false>);
-  pass(m, slaves_, ns_, ns_own_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_);
+  pass(m, slaves_, ns_, ns_own_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_, seeding);
+  if (seeding) clear_handover_marks(m.icontact, ni_);
   contact_account(pass_, status_, 0.5 * skin);
   --until_recheck_;
 }

@@ -75,13 +75,18 @@ class ContactSystem {
   // the contact data and the interface handover flags in m.
   ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m, const std::vector<double>& mass);
 
-  // One step at positions m.x and velocities m.v (v(n-1/2)): hands failed interfaces over,
-  // rebuilds the candidate lists when needed, adds the contact forces to sf (the force kernel's
-  // scatter view before its contribute: Simulation::step), or, without sf, to m.f (through a
-  // scatter view of its own: tests).
+  // The step's poll (Simulation::step calls it before the internal forces, so that an interface
+  // handed over at the poll acts no more in that step and its nodes' contacts take its state over
+  // in that step's update; every kContactPollEvery steps while interfaces are left): hands failed
+  // interfaces over when the force kernel has flagged one.
+  void poll(const Model<D>& m);
+  // One step at positions m.x and velocities m.v (v(n-1/2)) after the poll: rebuilds the
+  // candidate lists when needed, adds the contact forces to sf (the force kernel's scatter view
+  // before its contribute: Simulation::step), or, without sf, to m.f (through a scatter view of
+  // its own: tests).
   using Scatter = ForceScatter<D>;
   void update(const Model<D>& m, double dt, Scatter& sf);
-  void update(const Model<D>& m, double dt);
+  void update(const Model<D>& m, double dt);  // poll, then update (tests)
   // Hands every failed interface over now (update() does it when the force kernel flags one).
   void check_failures(const Model<D>& m);
 
@@ -196,6 +201,7 @@ class ContactSystem {
   bool part_ = false;  // a part of a decomposed run: nodes from nown_ on are ghosts
   int nown_ = 0, ns_own_ = 0;
   bool polled_ = false;
+  bool seeding_ = false;  // interfaces handed over at this step's poll: the narrow pass takes their state
   double stable_ = 0;
   ContactSurface<D> surf_;
   PairFilter<D> filter_;
@@ -213,7 +219,7 @@ class ContactSystem {
   CellGrid<D> tgrid_;                         // grid of the touched faces
   bool may_meet_ = false, need_build_ = true;
   bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
-  bool joint_friction_ = false;  // some face has a frictional joint's friction above 0 (surf_.fmu)
+  bool joint_friction_ = false;  // some face has its own friction above 0 (surf_.fmu: a joint's, a residual one)
   int bodies_ = 0;
   int check_every_ = 1, since_check_ = 0;
   int until_recheck_ = 0;  // steps to the next re-check of the candidate lists (0: this step)

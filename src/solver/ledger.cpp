@@ -24,7 +24,7 @@ std::vector<EnergyTerm> builtin_terms() {
        &Energies::fracture},
       {"damping", "D_damping [J]", S::dissipated, true, "node update; Simulation::book_energies",
        &Energies::damping},
-      {"friction", "D_friction [J]", S::dissipated, true, "platens and contact (book_energies)",
+      {"friction", "D_friction [J]", S::dissipated, true, "interfaces (interface_state), platens and contact",
        &Energies::friction},
       {"external_work", "W_external [J]", S::work, true,
        "platens, velocity BCs, gravity, point loads (book_energies)", &Energies::work_external},

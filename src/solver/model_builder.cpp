@@ -164,7 +164,9 @@ ElementSetup build_elements(const Case& c, const HostMesh& mesh, const MaterialT
 }
 
 CohesiveParams cohesive_params(const InterfaceMaterial& im) {
-  return CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta};
+  // (a frictional joint starts failed and handed over: its interfaces never act)
+  const double tanphir = im.residual_friction && !im.frictional() ? std::tan(im.phi_r) : -1.0;
+  return CohesiveParams{im.kn, im.ks, im.ft, im.c, std::tan(im.phi), im.Gnc, im.Gsc, im.eta, tanphir};
 }
 
 // The per-interface material table, index and strength factors (InterfaceData::params); nothing
@@ -190,17 +192,24 @@ void upload_interface_materials(const Case& c, const InterfaceMaterialMap& map, 
   m.scale_energy = c.scatter.energy;
 }
 
-// Interfaces of frictional joint materials (no tension, no cohesion): failed (damage 1 at every
-// point, nothing dissipated) and handed over to contact from the start, with their friction in
-// m.ifric. Nothing when no interface takes such a material.
+// The friction of the interfaces: slip states (m.islip) when some interface's material has
+// a residual friction (InterfaceMaterial::residual_friction); the friction of the
+// contact faces each interface leaves (m.ifric: a frictional joint's tan(phi), a softening
+// material's residual tan(phi_r), -1 for the paper's law) when some interface takes either.
+// Interfaces of frictional joint materials (no tension, no cohesion) start failed (damage 1 at
+// every point, nothing dissipated) and handed over to contact. Nothing when no interface needs it.
 template <int D>
-void start_frictional_joints(const Case& c, const InterfaceMaterialMap& map, Model<D>& m) {
+void start_interface_friction(const Case& c, const InterfaceMaterialMap& map, Model<D>& m) {
   auto material = [&](int q) -> const InterfaceMaterial& {
     return c.interface_materials[map.material.empty() ? c.fracture_material : map.material[q]];
   };
-  bool any = false;
-  for (int q = 0; q < m.ni && !any; ++q) any = material(q).frictional();
-  if (!any) return;
+  bool joints = false, slip = false;
+  for (int q = 0; q < m.ni && !(joints && slip); ++q) {
+    joints = joints || material(q).frictional();
+    slip = slip || (!material(q).frictional() && material(q).residual_friction);
+  }
+  if (slip) m.islip = Kokkos::View<double* [D][D + 1]>("fdem::islip", m.ni);
+  if (!joints && !slip) return;
   m.ifric = Kokkos::View<double*>("fdem::ifric", m.ni);
   auto fr_h = mirror(m.ifric);
   auto h_h = Kokkos::create_mirror_view(m.ihist);
@@ -209,7 +218,7 @@ void start_frictional_joints(const Case& c, const InterfaceMaterialMap& map, Mod
   Kokkos::deep_copy(ic_h, m.icontact);
   for (int q = 0; q < m.ni; ++q) {
     const InterfaceMaterial& iq = material(q);
-    fr_h(q) = iq.frictional() ? std::tan(iq.phi) : -1.0;
+    fr_h(q) = iq.frictional() ? std::tan(iq.phi) : iq.residual_friction ? std::tan(iq.phi_r) : -1.0;
     if (!iq.frictional()) continue;
     for (int k = 0; k < D; ++k) store_point(h_h, q, k, failed_point());  // damage 1, nothing dissipated
     ic_h(q) = 1;
@@ -258,7 +267,7 @@ double build_interfaces(const Case& c, const HostMesh& mesh, const std::vector<d
   for (int q = 0; q < ni; ++q) step = std::min(step, step_q[q]);
   Kokkos::deep_copy(m.iface, if_h);
   Kokkos::deep_copy(m.iarea, ia_h);
-  start_frictional_joints<D>(c, map, m);
+  start_interface_friction<D>(c, map, m);
   return step;
 }
 

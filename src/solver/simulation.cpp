@@ -22,6 +22,7 @@ void Simulation<D>::set_strength_reduction(double factor) {
   m.coh.ft = coh0_.ft / factor;
   m.coh.c = coh0_.c / factor;
   m.coh.tanphi = coh0_.tanphi / factor;
+  m.coh.tanphir = coh0_.tanphir > 0 ? coh0_.tanphir / factor : coh0_.tanphir;  // (< 0: the paper's law)
   m.coh.rescale = srf_hist_ / factor;
   m.srf = factor;  // interfaces with their own parameters (InterfaceData::params)
   if (contact_) {
@@ -46,6 +47,12 @@ void Simulation<D>::step(bool sample) {
     phase += clock.seconds();
     clock.reset();
   };
+  // interfaces handed over to contact at this step's poll act no more in it (ContactSystem::poll)
+  if (contact_) {
+    contact_->poll(m);
+    // the platens act on the faces handed over at the poll from this step on
+    if (platens_.surfaces_changed(*contact_)) platens_.follow_surfaces(m, *contact_, t);
+  }
   // (over several processes the force pass contributes, and contact adds its forces in a pass of
   // its own: Parts::force_pass_contributes)
   compute_forces<D>(m, scatter_, force_pass_contributes_);
@@ -62,7 +69,6 @@ void Simulation<D>::step(bool sample) {
     Kokkos::Experimental::contribute(m.f, scatter_);
     parts_.return_ghost_forces(m, phase_times_.exchange);
     if (contact_->polled()) agree_on_contact();
-    if (platens_.surfaces_changed(*contact_)) platens_.follow_surfaces(m, *contact_, t);
     if (stable.contact_pending && surfaces_may_meet()) apply_contact_step();
     lap(phase_times_.contact);
   }
@@ -94,6 +100,7 @@ Energies Simulation<D>::sample_energies(bool sample) {
     const InterfaceSums is = interface_state<D>(m);
     e.interface_elastic = is.elastic;
     e.fracture = is.fracture;
+    e.friction = is.friction;  // (book_energies adds the platens' and the contacts')
     e.damaged = static_cast<long>(is.damaged);
     e.failed = static_cast<long>(is.failed);
   }
@@ -341,8 +348,14 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
              prm_.alpha = a[0];
              prm_.cmass = a[1];
            });
-  f.values("model/cohesive", kCohesiveArraySize, [&] { return to_array(m.coh); },
-           [&](const std::vector<double>& a) { m.coh = cohesive_params_from_array(a.data()); });
+  // (checkpoints from before the residual friction hold 8 values: cohesive_params_from_array)
+  f.values("model/cohesive", -1, [&] { return to_array(m.coh); },
+           [&](const std::vector<double>& a) {
+             if (a.size() != 8 && a.size() != static_cast<size_t>(kCohesiveArraySize))
+               throw InputError("checkpoint entry model/cohesive has " + std::to_string(a.size()) +
+                                " values (8 or " + std::to_string(kCohesiveArraySize) + " expected)");
+             m.coh = cohesive_params_from_array(a.data(), static_cast<int>(a.size()));
+           });
   // older checkpoints: no reduction applied yet
   f.values("simulation/strength_reduction", 3,
            [&] { return std::array<double, 3>{srf_, srf_hist_, m.coh.rescale}; },
@@ -357,6 +370,7 @@ void Simulation<D>::checkpoint_fields(Fields& f) {
   f.view("model/v", m.v);
   f.view("model/f", m.f);
   f.view("model/ihist", m.ihist);
+  f.view("model/islip", m.islip, m.has_slip());
   f.view("model/icontact", m.icontact);
   f.view("model/icontact_pending", m.icontact_pending, m.icontact_pending.data() != nullptr);
   platens_.checkpoint_fields(f, m);
@@ -390,6 +404,11 @@ void Simulation<D>::load_state(const StateArrays& s) {
     throw InputError("checkpoint '" + s.file + "' has no contact state but this case has contact");
   if (!contact_ && s.has("contact/pair_count"))
     throw InputError("checkpoint '" + s.file + "' has contact state but this case has no contact");
+  if (m.has_slip() && !s.has("model/islip"))
+    throw InputError("checkpoint '" + s.file +
+                     "' holds no slip states of softening interfaces: it was written with the paper's interface "
+                     "law (or before the residual friction); restart it with \"law\": \"paper\" on "
+                     "the case's interface materials");
   StateLoader loader(s);
   checkpoint_fields(loader);
   push_works();

@@ -32,7 +32,8 @@ std::vector<ItemEntry> item_entries(int platens) {
   return {{"model/x", true, 1, D},           {"model/v", true, 1, D},
           {"model/f", true, 1, D},           {"model/platen_area", true, 1, 1},
           {"model/platen_fs", true, platens, D}, {"model/platen_g0", true, platens, 1},
-          {"model/ihist", false, 1, kPointHistory * D},  {"model/icontact", false, 1, 1}};
+          {"model/ihist", false, 1, kPointHistory * D},  {"model/icontact", false, 1, 1},
+          {"model/islip", false, 1, slip_state_size<D>() * D}};  // (only with slip states: Model::islip)
 }
 
 // Accumulators of what each process's own items did (their sum is the whole run's).
@@ -350,7 +351,7 @@ void check_whole_state(const Simulation<D>& sim, const StateArrays& given) {
     if (owned[k] != whole[k])
       diff += std::string(" ") + what[k] + " owned " + std::to_string(static_cast<long>(owned[k])) + " times for " +
               std::to_string(static_cast<long>(whole[k]));
-  for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact"})
+  for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact", "model/islip"})
     if (given.has(name) && entry_values(given, name) != entry_values(again, name)) diff += std::string(" ") + name;
   if (sim.contact()) {  // the pairs with a history, in any order
     const size_t w = ContactSystem<D>::kPairRow;
