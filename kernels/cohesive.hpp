@@ -186,27 +186,36 @@ KOKKOS_INLINE_FUNCTION double elastic_slip(const double (&n)[D], const double (&
 
 // One step of the residual friction's Coulomb spring at separation d (normal n, normal separation
 // dn, tangential part ds) beside a cohesive shear traction of magnitude tc, whose damage rose by
-// dD in the step. The spring takes over what the cohesion lost: its trial elastic slip is
-// e = P (d - sp) + dD ds (at fixed ds the damage moves dD k_s ds of the traction from the
-// cohesive secant to the friction spring: the shear traction as a whole follows the elastic
-// increment, so the friction comes in as fast as the cohesion goes, however brittle the
-// softening), cut back to |k_s e| <= max(0, tan(phi_r) k_n <-dn> - tc): it supplies what the
-// softening cohesion no longer carries, up to the residual friction (open, it carries nothing and
-// sp follows d). Updates sp (= ds - e, in this step's tangent plane); returns e, the energy the
-// slip dissipated per unit area (the traction after the return times the slip of the step,
-// k_s e . (e_trial - e): the work a steady slide does on the leap-frog's steps; the energy the
-// elastic predictor puts beyond the limit, k_s |e_trial - e|^2 / 2 more, is the predictor's, and
-// counting it made the balance drift by 0.4 % of the slide's work in the 3D direct shear of
-// tests/test_joints.cpp) and in `moved` the energy the damage moved into the spring's trial (the
-// caller books it against the fracture dissipation, which counts the whole secant energy psi0 dD
-// as released).
+// dD in the step; du: the change of d over the step (x(n) - x(n-1) of the node pair). The spring
+// takes over what the cohesion lost: its trial elastic slip is e = P (d - sp) + dD ds (at fixed ds
+// the damage moves dD k_s ds of the traction from the cohesive secant to the friction spring: the
+// shear traction as a whole follows the elastic increment, so the friction comes in as fast as
+// the cohesion goes, however brittle the softening), cut back to |k_s e| <= max(0, tan(phi_r)
+// k_n <-dn> - tc): it supplies what the softening cohesion no longer carries, up to the residual
+// friction (open, it carries nothing and sp follows d). Updates sp (= ds - e, in this step's
+// tangent plane); returns e, in `moved` the energy the damage moved into the spring (the caller
+// books it against the fracture dissipation, which counts the whole secant energy psi0 dD as
+// released), and the energy the step dissipated per unit area: the spring's energy before, plus
+// the work of the mean of its old and new tractions over the step's tangential motion P du, plus
+// moved, less its energy after (the old elastic slip: e_trial - P du before the transfer). In a
+// steady slide that is the traction times the slip; where the limit falls (the faces open, the
+// compression eases) it releases what the spring held. (psi_trial - psi_after, the energy the
+// return releases at fixed positions, counts the elastic predictor's overshoot, k_s |slip|^2 / 2
+// a step, as well: the balance drifted by 0.4 % of a slide's work in the 3D direct shear of
+// tests/test_joints.cpp; the traction times the slip alone missed the release: 3.4 % of the
+// energy in the 2D impact.)
 template <int D>
 KOKKOS_INLINE_FUNCTION double friction_return(const CohesiveParams& p, const double (&n)[D], const double (&d)[D],
                                               double dn, const double (&ds)[D], double tc, double dD,
-                                              SlipPoint<D>& s, double (&e)[D], double& moved) {
+                                              const double (&du)[D], SlipPoint<D>& s, double (&e)[D],
+                                              double& moved) {
   const double e2pre = elastic_slip<D>(n, d, s, e);
-  double e2 = 0;
+  double dun = 0;
+  for (int i = 0; i < D; ++i) dun += du[i] * n[i];
+  double eo[D], e2old = 0, e2 = 0;  // the old elastic slip, and the trial
   for (int i = 0; i < D; ++i) {
+    eo[i] = e[i] - (du[i] - dun * n[i]);
+    e2old += eo[i] * eo[i];
     e[i] += dD * ds[i];
     e2 += e[i] * e[i];
   }
@@ -214,11 +223,13 @@ KOKKOS_INLINE_FUNCTION double friction_return(const CohesiveParams& p, const dou
   const double lim = kmax(0.0, p.tanphir * p.kn * kselect(dn < 0.0, -dn, 0.0) - tc);
   const double te = p.ks * kmath::sqrt(e2);
   const double c = te > lim ? (te > 0.0 ? lim / te : 0.0) : 1.0;
+  double w = 0;  // (old + new elastic slip) . P du
   for (int i = 0; i < D; ++i) {
     e[i] *= c;
     s.sp[i] = ds[i] - e[i];
+    w += (eo[i] + e[i]) * (du[i] - dun * n[i]);
   }
-  return p.ks * e2 * c * (1.0 - c);
+  return 0.5 * p.ks * (e2old + w - c * c * e2) + moved;
 }
 
 }  // namespace fdem

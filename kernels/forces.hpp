@@ -23,6 +23,7 @@ constexpr int kChunk =
 template <int D, bool PerIface, bool Fric>
 struct ForceKernel {
   Kokkos::View<double* [D]> x;
+  Kokkos::View<double* [D]> v;  // v(n - 1/2): the step's motion of a softening point's node pair (Fric)
   ElementData<D> el;
   InterfaceData<D> in;
   ForceScatter<D> sf;
@@ -68,7 +69,11 @@ struct ForceKernel {
     }
     CohesivePoint h0[D];
     for (int k = 0; k < D; ++k) h0[k] = h[k];
-    const double dmean = interface_forces<D, Fric>(xa, xb, in.iarea(q), p, h, sl, fa, fb);
+    double du[D][D];  // x(n) - x(n-1) of each node pair: v(n - 1/2) dt (softening points, Fric)
+    for (int k = 0; k < D; ++k)
+      for (int i = 0; i < D; ++i)
+        du[k][i] = Fric && h[k].dm0 > 0.0 ? (v(in.iface(q, D + k), i) - v(in.iface(q, k), i)) * in.step_dt : 0.0;
+    const double dmean = interface_forces<D, Fric>(xa, xb, in.iarea(q), p, h, sl, fa, fb, du);
     if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
       Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     for (int k = 0; k < D; ++k) {
@@ -114,11 +119,11 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
   const Kokkos::RangePolicy<ExecSpace> policy(0, fused ? nbc : nbc + nic);
   auto run = [&](auto kernel) { Kokkos::parallel_for("fdem::forces", policy, kernel); };
   if (m.per_interface()) {
-    if (m.has_slip()) run(ForceKernel<D, true, true>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
-    else run(ForceKernel<D, true, false>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
+    if (m.has_slip()) run(ForceKernel<D, true, true>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
+    else run(ForceKernel<D, true, false>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
   } else {
-    if (m.has_slip()) run(ForceKernel<D, false, true>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
-    else run(ForceKernel<D, false, false>{m.x, m.elements(), m.interfaces(), sf, nbc, fused});
+    if (m.has_slip()) run(ForceKernel<D, false, true>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
+    else run(ForceKernel<D, false, false>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
   }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;

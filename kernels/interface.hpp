@@ -137,7 +137,8 @@ KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const dou
 }
 
 // The residual friction of one softening point (interface_forces; friction_return, cohesive.hpp)
-// beside its cohesive shear traction of magnitude tc, its damage risen by dD in the step: the slip
+// beside its cohesive shear traction of magnitude tc, its damage risen by dD and its separation
+// changed by du in the step (fresh: it began to soften in this step): the slip
 // step and its dissipation (sl.wf), the energy the damage moved into the spring taken off the
 // fracture dissipation (h.wd), and the forces of U_f = ap k_s |P (d - sp)|^2 / 2 added to the
 // point's (fa, fb) and to dU/dn (g): dU_f/dd = ap k_s e, dU_f/dn = -ap k_s (r . n) r with
@@ -145,10 +146,15 @@ KOKKOS_INLINE_FUNCTION bool interface_parted(const double (&xa)[D][D], const dou
 template <int D>
 KOKKOS_INLINE_FUNCTION void residual_friction(const CohesiveParams& p, const double (&n)[D], const double (&d)[D],
                                               double dn, const double (&ds)[D], double ap, double tc, double dD,
-                                              CohesivePoint& h, SlipPoint<D>& sl, double (&fa)[D], double (&fb)[D],
-                                              double (&g)[D]) {
+                                              const double (&du)[D], bool fresh, CohesivePoint& h,
+                                              SlipPoint<D>& sl, double (&fa)[D], double (&fb)[D], double (&g)[D]) {
+  if (fresh) {  // begun to soften in this step: the spring starts unstretched at x(n-1)
+    double dun = 0;
+    for (int i = 0; i < D; ++i) dun += du[i] * n[i];
+    for (int i = 0; i < D; ++i) sl.sp[i] = ds[i] - (du[i] - dun * n[i]);
+  }
   double e[D], moved;
-  sl.wf += friction_return<D>(p, n, d, dn, ds, tc, dD, sl, e, moved);
+  sl.wf += friction_return<D>(p, n, d, dn, ds, tc, dD, du, sl, e, moved);
   h.wd -= moved;
   const double kf = ap * p.ks;
   for (int i = 0; i < D; ++i) {
@@ -176,7 +182,8 @@ template <int D, bool Fric = false>
 KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
                                                double ap, const CohesiveParams& p,
                                                CohesivePoint (&h)[D], SlipPoint<D> (&sl)[D],
-                                               double (&fa)[D][D], double (&fb)[D][D]) {
+                                               double (&fa)[D][D], double (&fb)[D][D],
+                                               const double (&du)[D][D]) {
   double n[D], ap_cur;
   interface_frame<D>(xa, xb, 1.0, n, ap_cur);
   double dsum = 0;
@@ -195,6 +202,7 @@ KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const d
     }
     double tn, kss, dmg;
     const double dmg0 = Fric ? cohesive_damage(h[k]) : 0.0;
+    const bool fresh = !(h[k].dm0 > 0.0);
     cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
     dsum += dmg;
     for (int i = 0; i < D; ++i) {
@@ -204,7 +212,8 @@ KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const d
     }
     if constexpr (Fric) {
       if (p.tanphir >= 0.0 && dmg > 0.0)
-        residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, h[k], sl[k], fa[k], fb[k], g);
+        residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, du[k], fresh, h[k], sl[k],
+                             fa[k], fb[k], g);
     }
   }
   // dU/dn -> forces through the mid-surface points m_k = (xa_k + xb_k) / 2.

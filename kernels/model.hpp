@@ -102,6 +102,7 @@ struct InterfaceData {
   // (the others' is zero and never read). Empty otherwise.
   Kokkos::View<double* [D][D + 1]> islip;
   KOKKOS_INLINE_FUNCTION bool has_slip() const { return islip.extent(0) > 0; }
+  double step_dt = 0;  // the step that brought the positions to x(n) (Simulation::step sets it)
   Kokkos::View<double*> iarea;        // reference tributary area of each integration point
   // Host backends, interfaces ordered by their side-A element: first interface of each chunk of
   // kChunk elements (ceil(ne / kChunk) + 1 entries); the force kernel then does each element

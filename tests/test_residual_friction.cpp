@@ -46,7 +46,8 @@ Walk walk(const CohesiveParams& p, Path path, int n) {
     path(static_cast<double>(i) / n, d[0], d[1]);
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j) xb[k][j] = xa[k][j] + d[j];
-    w.damage = fdem::interface_forces<2, true>(xa, xb, ap, p, h, sl, fa, fb);
+    const double du[2][2] = {{d[0] - d0[0], d[1] - d0[1]}, {d[0] - d0[0], d[1] - d0[1]}};
+    w.damage = fdem::interface_forces<2, true>(xa, xb, ap, p, h, sl, fa, fb, du);
     for (int k = 0; k < 2; ++k)
       for (int j = 0; j < 2; ++j) w.work -= 0.5 * (fb0[k][j] + fb[k][j]) * (d[j] - d0[j]);
     w.tau.push_back(std::abs(fa[0][0]) / ap);

@@ -129,12 +129,11 @@ struct PairSubset {
 // other side's nodes carry the rest). The node's contacts start from it (contacts, contact_pair):
 // a new contact may start as deep as un explains, a contact that grows takes un as budget, and
 // each contact's shear spring starts with its share of F; what they do not take is dissipated.
-// A node pair of which one node lies over none of its candidate faces (over_a_face; the end of a
-// joint whose blocks have slid past each other: the interface still paired the overhanging node
-// with the other block's last node) gives the whole point to the other node, so that the shear
-// force goes on; a spring that carries the two halves stores twice their energy
-// (the balance shows the difference: 0.01 % of the work in the 3D direct shear of
-// tests/test_joints.cpp).
+// A node whose contacts find no face under it (the end of a joint whose blocks have slid past
+// each other: the interface still paired the overhanging node with the other block's last node)
+// leaves its share to no one: the other block settles onto the contacts left (docs/theory.md
+// section 4, the dip this gives). Each node's seed comes from the interfaces' own state alone, so
+// every process that holds a node decides alike.
 template <int D>
 struct HandoverSeed {
   double un = 0, us = 0;
@@ -142,24 +141,8 @@ struct HandoverSeed {
   bool any = false;
 };
 
-// Whether node s at p lies over one of its candidate faces (P) within dpen of it (its projection
-// within the face, to the contact's fade tolerance): whether it will find a contact.
 template <int D>
-KOKKOS_INLINE_FUNCTION bool over_a_face(const ContactSurface<D>& S, const PairList<D>& P, const ContactLaw& L, int s,
-                                        const double (&p)[D]) {
-  for (int j = P.off(s); j < P.off(s + 1); ++j) {
-    double n[D], N[D];
-    const double g = face_project_geo<D>(S.fgeo, S.fslot(P.face(j)), p, n, N);
-    double score = N[0];
-    for (int a = 1; a < D; ++a) score = N[a] < score ? N[a] : score;
-    if (score > -L.tol && g > -L.dpen && g < L.dpen) return true;
-  }
-  return false;
-}
-
-template <int D>
-KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S, const PairList<D>& P,
-                                                     const ContactLaw& L, const InterfaceData<D>& in,
+KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S, const InterfaceData<D>& in,
                                                      const Kokkos::View<double* [D]>& x, int s) {
   HandoverSeed<D> r;
   for (int t = S.nfoff(s); t < S.nfoff(s + 1); ++t) {
@@ -182,24 +165,15 @@ KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S,
       d[i] = xb[k][i] - xa[k][i];
       dn += d[i] * n[i];
     }
-    // the node's share: half the point's, none when it lies over no face of its partner's side,
-    // all of it when its partner lies over none of its side's
-    const int partner = side > 0 ? in.iface(q, D + k) : in.iface(q, k);
-    double xs[D], xp[D];
-    for (int i = 0; i < D; ++i) {
-      xs[i] = x(s, i);
-      xp[i] = x(partner, i);
-    }
-    const double share = !over_a_face<D>(S, P, L, s, xs) ? 0.0 : over_a_face<D>(S, P, L, partner, xp) ? 0.5 : 1.0;
     const CohesiveParams p = in.params(q);
     const double ap = in.iarea(q);
     r.any = true;
-    r.un += dn < 0.0 ? 0.5 * share * ap * p.kn * dn * dn : 0.0;
+    r.un += dn < 0.0 ? 0.25 * ap * p.kn * dn * dn : 0.0;
     if (in.has_slip() && p.tanphir >= 0.0) {  // failed: the residual friction carries all the shear
       double e[D];
       const double e2 = elastic_slip<D>(n, d, load_slip<D>(in.islip, q, k), e);
-      r.us += 0.5 * share * share * 2.0 * ap * p.ks * e2;  // (share 1: one spring, twice the force)
-      for (int i = 0; i < D; ++i) r.F[i] += side * share * ap * p.ks * e[i];
+      r.us += 0.25 * ap * p.ks * e2;
+      for (int i = 0; i < D; ++i) r.F[i] += side * 0.5 * ap * p.ks * e[i];
     }
   }
   return r;
@@ -245,7 +219,7 @@ struct ContactForcesFn {
     sums.d2max = d2 > sums.d2max ? d2 : sums.d2max;
     sums.v2max = v2 > sums.v2max ? v2 : sums.v2max;
     if (i >= nforce) return;
-    const HandoverSeed<D> seed = seeding ? handover_seed<D>(S, P, L, in, x, s) : HandoverSeed<D>{};
+    const HandoverSeed<D> seed = seeding ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{};
     const int b = P.off(s), e = P.off(s + 1);
     if (b == e) {
       sums.dissipated += seed.un + seed.us;  // no contact to take it

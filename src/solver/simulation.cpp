@@ -55,6 +55,7 @@ void Simulation<D>::step(bool sample) {
   }
   // (over several processes the force pass contributes, and contact adds its forces in a pass of
   // its own: Parts::force_pass_contributes)
+  m.step_dt = dt;  // x(n) - x(n-1) = v(n - 1/2) dt (a step change applies from the step after it)
   compute_forces<D>(m, scatter_, force_pass_contributes_);
   if (m.coh.rescale != 1.0) {  // the histories now follow the present strength
     m.coh.rescale = 1.0;
