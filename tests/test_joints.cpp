@@ -169,6 +169,22 @@ TEST(Joints, CaseKeysAreCheckedAgainstTheMesh) {
   EXPECT_EQ(case_error(head + R"("boundary": {"fixed": [{"set": "region.lower"}]}})", &mesh), "");
 }
 
+// Runs the shear box `doc` (its regions, materials and loads set) on joint_square.geo (2D, plane
+// strain, thickness 1) or joint_box.geo (3D) until end_time, 4000 history rows, in dir/out.
+void run_shear_box(json& doc, int dim, double end_time, const std::string& dir) {
+  doc["dimension"] = dim;
+  doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
+  if (dim == 2) doc["analysis"] = {{"plane", "strain"}, {"thickness", 1.0}};
+  doc["time"] = {{"end_time", end_time}, {"safety_factor", 0.5}};
+  doc["output"] = {{"history_rows", 4000}, {"snapshot_count", 0}};
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir + "/case.json") << doc.dump(2);
+  const std::string env = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
+  const int st = fdem::test::system_status(env + FDEM_BINARY + " run " + dir + "/case.json --out " + dir +
+                                           "/out --quiet > " + dir + "/run.log 2>&1");
+  EXPECT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+}
+
 // Direct shear of the joint between the two blocks of joint_square.geo / joint_box.geo in a
 // rigid shear box: every node of the lower block fixed, every node of the upper block moving at
 // (vx, -vy) (2D; (vx, 0, -vy) in 3D), so that the joint closes and slides uniformly. Returns the
@@ -191,20 +207,10 @@ std::vector<Stresses> direct_shear(int dim, const json& joint, double vx, double
     "damping": {"local": 0}
   })");
   doc["interface_materials"]["joint_if"] = joint;
-  doc["dimension"] = dim;
-  doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
-  if (dim == 2) doc["analysis"] = {{"plane", "strain"}, {"thickness", 1.0}};
   const json v = dim == 2 ? json::array({vx, -vy}) : json::array({vx, 0.0, -vy});
   doc["boundary"] = {{"fixed", {{{"set", "region.lower"}}}},
                      {"velocity", {{{"set", "region.upper"}, {"velocity", v}}}}};
-  doc["time"] = {{"end_time", end_time}, {"safety_factor", 0.5}};
-  doc["output"] = {{"history_rows", 4000}, {"snapshot_count", 0}};
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir + "/case.json") << doc.dump(2);
-  const std::string env = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
-  const int st = fdem::test::system_status(env + FDEM_BINARY + " run " + dir + "/case.json --out " + dir +
-                                           "/out --quiet > " + dir + "/run.log 2>&1");
-  EXPECT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+  run_shear_box(doc, dim, end_time, dir);
   // the lower block's reaction: x (shear), and y (2D) or z (3D) (normal)
   std::istringstream in(fdem::test::slurp(dir + "/out/history.csv"));
   std::string line;
@@ -303,9 +309,6 @@ ShearRun constant_normal_shear(int dim, double sigma, double phi_r_deg, double e
   doc["interface_materials"]["joint_if"]["phi_r_deg"] = phi_r_deg;
   doc["interface_materials"]["joint_if"]["law"] = "residual_friction";
   if (body) doc["fracture"]["regions"] = {"lower", "upper"};
-  doc["dimension"] = dim;
-  doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
-  if (dim == 2) doc["analysis"] = {{"plane", "strain"}, {"thickness", 1.0}};
   const double area = dim == 2 ? 0.1 : 0.01;
   const json drive = dim == 2 ? json::array({0.1, 0.0}) : json::array({0.1, 0.0, 0.0});
   const json load = dim == 2 ? json::array({0.0, -sigma * area}) : json::array({0.0, 0.0, -sigma * area});
@@ -313,14 +316,7 @@ ShearRun constant_normal_shear(int dim, double sigma, double phi_r_deg, double e
       {"fixed", {{{"set", "region.lower"}}}},
       {"velocity", {{{"set", "region.upper"}, {"velocity", drive}, {"components", "x"}, {"ramp_time", 4e-3}}}},
       {"point_loads", {{{"set", "top"}, {"force", load}, {"ramp_time", 1e-3}}}}};
-  doc["time"] = {{"end_time", end_time}, {"safety_factor", 0.5}};
-  doc["output"] = {{"history_rows", 4000}, {"snapshot_count", 0}};
-  std::filesystem::create_directories(dir);
-  std::ofstream(dir + "/case.json") << doc.dump(2);
-  const std::string env = "env OMP_NUM_THREADS=1 OMP_PROC_BIND=false ";
-  const int st = fdem::test::system_status(env + FDEM_BINARY + " run " + dir + "/case.json --out " + dir +
-                                           "/out --quiet > " + dir + "/run.log 2>&1");
-  EXPECT_EQ(st, 0) << fdem::test::slurp(dir + "/run.log");
+  run_shear_box(doc, dim, end_time, dir);
   auto h = fdem::test::read_history(dir + "/out/history.csv");
   ShearRun r;
   const std::string nname = std::string("region.lower_reaction_") + (dim == 2 ? "y" : "z") + " [N]";
