@@ -52,16 +52,17 @@ struct ForceKernel {
     CohesivePoint h[D];
     SlipPoint<D> sl[D];
     gather_interface<D>(x, in.iface, q, xa, xb);
-    for (int k = 0; k < D; ++k) {
-      h[k] = load_point(in.ihist, q, k);
-      sl[k] = Fric && h[k].dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
-    }
+    for (int k = 0; k < D; ++k) h[k] = load_point(in.ihist, q, k);
     const CohesiveParams p = PerIface ? in.params(q) : in.coh;
+    // the slip state and the step's motion of a softening point with a residual friction only
+    // (a point that has not begun to soften, or under the paper's law, reads neither)
+    const bool slips = Fric && p.tanphir >= 0.0;
+    for (int k = 0; k < D; ++k) sl[k] = slips && h[k].dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
     if (interface_apart<D>(xa, xb, h)) {
       interface_fail_all<D, Fric>(xa, xb, p, h, sl);
       for (int k = 0; k < D; ++k) {
         store_point(in.ihist, q, k, h[k]);
-        if (Fric) store_slip<D>(in.islip, q, k, sl[k]);
+        if (slips) store_slip<D>(in.islip, q, k, sl[k]);
       }
       if (handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
       else in.icontact(q) = 1;
@@ -72,7 +73,7 @@ struct ForceKernel {
     double du[D][D];  // x(n) - x(n-1) of each node pair: v(n - 1/2) dt (softening points, Fric)
     for (int k = 0; k < D; ++k)
       for (int i = 0; i < D; ++i)
-        du[k][i] = Fric && h[k].dm0 > 0.0 ? (v(in.iface(q, D + k), i) - v(in.iface(q, k), i)) * in.step_dt : 0.0;
+        du[k][i] = slips && h[k].dm0 > 0.0 ? (v(in.iface(q, D + k), i) - v(in.iface(q, k), i)) * in.step_dt : 0.0;
     const double dmean = interface_forces<D, Fric>(xa, xb, in.iarea(q), p, h, sl, fa, fb, du);
     if (handover && dmean >= 1.0 && interface_parted<D>(xa, xb, in.handover_slip))
       Kokkos::atomic_exchange(&in.icontact_pending(), 1);
@@ -81,7 +82,7 @@ struct ForceKernel {
       // undamaged or unload: no write traffic for them); the slip state of a softening point
       // (its slip follows the faces' every move)
       if (!same_point(h[k], h0[k])) store_point(in.ihist, q, k, h[k]);
-      if (Fric && h[k].dm0 > 0.0 && p.tanphir >= 0.0) store_slip<D>(in.islip, q, k, sl[k]);
+      if (slips && h[k].dm0 > 0.0) store_slip<D>(in.islip, q, k, sl[k]);
       for (int i = 0; i < D; ++i) {
         acc(in.iface(q, k), i) += fa[k][i];
         acc(in.iface(q, D + k), i) += fb[k][i];
