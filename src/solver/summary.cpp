@@ -244,8 +244,12 @@ nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const C
   comm.gather(std::vector<double>{busy_here}, busy);
   const double cut_seconds = cuts.cut_seconds + cut_setup;
   const auto& b = sim.balance();
-  std::vector<double> after = cuts.excess_after_cuts;
-  if (b.after_cut >= 0) after.push_back(b.after_cut);
+  // the excess at the first check of each part (the start's, then each cut's); null where a part
+  // ended before its first check (a cut, or the run's end, within kContactPollEvery steps)
+  nlohmann::json after = nlohmann::json::array();
+  for (double e : cuts.excess_after_cuts) after.push_back(e >= 0 ? nlohmann::json(e) : nlohmann::json());
+  after.push_back(b.after_cut >= 0 ? nlohmann::json(b.after_cut) : nlohmann::json());
+  const bool checked = b.after_cut >= 0 || !cuts.excess_after_cuts.empty();
   nlohmann::json p = {{"count", comm.size()},
                       {"contact_recuts", cuts.recuts},
                       {"rebalances", cuts.rebalances},
@@ -260,19 +264,20 @@ nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const C
                       {"peak_rss_bytes", peaks},
                       {"busy_seconds", busy}};
   // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
-  if (b.after_cut >= 0) {
+  if (checked) {
     p["rebalance_above"] = c.rebalance_above;
     const WorkModel& wm = c.work_model;
     p["work_model_ns"] = {{"element", wm.element},
                           {"interface", wm.interface},
                           {"node", wm.node},
                           {"contact_unit", wm.contact_unit}};
-    p["work_excess"] = b.excess;
+    const bool last = b.after_cut >= 0;  // the last part's checks (null: it had none)
+    p["work_excess"] = last ? nlohmann::json(b.excess) : nlohmann::json();
     p["work_excess_largest"] = std::max(b.largest, cuts.excess_largest);
     p["work_excess_at_rebalances"] = cuts.excess_at_rebalances;
     p["work_excess_after_cuts"] = after;
-    p["work_ns_per_step_most"] = b.work_most;
-    p["work_ns_per_step_mean"] = b.work_mean;
+    p["work_ns_per_step_most"] = last ? nlohmann::json(b.work_most) : nlohmann::json();
+    p["work_ns_per_step_mean"] = last ? nlohmann::json(b.work_mean) : nlohmann::json();
   }
   return p;
 }

@@ -93,16 +93,19 @@ CASES = {
 # the same with contact on, as the cases ship it (contact.zone derived: 1 mean element size)
 CASES.update({name + "+contact": (case, [x for x in sets if x not in COMMON], cols, peak, intact)
               for name, (case, sets, cols, peak, intact) in CASES.items() if name != "beam"})
-# the 3D impact at 40 m/s, 4000 steps, contact on: it breaks into about 190 fragments that touch
+# the 3D impact at 40 m/s, 4000 steps, contact on: it breaks into about 220 fragments that touch
 # each other and the crack faces. After that much fracture round-off meets failure thresholds and
-# the runs may part ways (with contact off, where fragments pass through each other, one process on
-# 1 and on 2 threads differed by 10 % of the plate load at some row, 5.4e-4 of the kinetic energy
-# and one fragment; measured here with contact on 1-4 processes: the same 190 fragments in every
-# row, the kinetic energy within 1.7e-5 and the fracture dissipation within 4.5e-5 of their largest
-# values, the same damaged and failed counts). Checked are what the issue asks after fracture: the
-# fragment counts (2 % or 2 fragments in every row of fragments.csv), the largest fragment's mass
-# fraction (1e-3), the kinetic energy and the fracture dissipation (5e-3 of their largest values),
-# the damaged and failed interfaces (1 % and 2 %).
+# the runs part ways: the run is chaotic. Measured on 1 process (2026-12-05): with the impact speed
+# changed by 2.5e-13 of itself the largest fragment's mass fraction moved by 0.6-1.6 %, the kinetic
+# energy by 1.2-1.5e-3 and the fracture dissipation by 0.5-5.4e-3 of their largest values, the
+# failed interfaces by 0.6-1.0 %, and three fragments; the same at main before the residual
+# friction (0.8-1.5 %, 3.4-3.6e-3, 0.6-0.8e-3, 0.6-0.8 %). The runs on 2-4 processes stayed inside
+# that: 2-2.5e-3 of the largest fraction, 1.5e-5 - 5.5e-4 of the kinetic energy, 1 fragment.
+# Checked are what the issue asks after fracture: the fragment counts (2 % or 2 fragments in every
+# row of fragments.csv), the largest fragment's mass fraction (1e-3), the kinetic energy and the
+# fracture dissipation (5e-3 of their largest values), the damaged and failed interfaces (1 % and
+# 2 %), each bound widened to twice the deviation of the two runs with the speed changed
+# (chaos_bounds), measured in the same check: a bound below round-off's own spread is luck's.
 # the bound over the whole run (after the first damage), where a case needs another than 1e-5
 AFTER_TOL = {"impact2d": 1e-4}
 FRAGMENTING = ("cases/particle_impact_3d/case.json",
@@ -254,24 +257,87 @@ def within_largest(name, h, a, b, tolerances):
         check(d < tol, f"{name}: {col} within {d:.1e} of its largest value (< {tol:g})")
 
 
-def compare_fragmenting(name, base, got):
-    """The fragmenting 3D impact against the run on 1 process (see FRAGMENTING)."""
+def fragmenting_deviations(base, got):
+    """How far a fragmenting run's rows are from the base's: the fragment counts beyond 2 % or 2
+    fragments in any row, the largest fraction's largest difference, the kinetic energy and the
+    fracture dissipation's largest difference over their largest value, and the damaged and failed
+    counts' difference at the end over the base's. None where the rows do not match."""
     (h, a), (fh, fa) = base
     (_, b), (_, fb) = got
     if len(a) != len(b) or len(fa) != len(fb):
+        return None
+    j, k = fh.index("fragments"), fh.index("largest_fraction")
+    dev = {"fragments": max(abs(ra[j] - rb[j]) - max(2.0, 0.02 * ra[j]) for ra, rb in zip(fa, fb)),
+           "largest_fraction": max(abs(ra[k] - rb[k]) for ra, rb in zip(fa, fb))}
+    for col in ("E_kinetic [J]", "D_fracture [J]"):
+        c = h.index(col)
+        dev[col] = max(abs(ra[c] - rb[c]) for ra, rb in zip(a, b)) / max(abs(r[c]) for r in a)
+    for col in ("interfaces_damaged", "interfaces_failed"):
+        c = h.index(col)
+        dev[col] = abs(a[-1][c] - b[-1][c]) / a[-1][c]
+    return dev
+
+
+# the bounds of the fragmenting runs over processes against the one on 1 process where round-off
+# has not yet grown; chaos_bounds widens them to twice the yardstick's deviations
+FRAGMENTING_BOUNDS = {"fragments": 0.0, "largest_fraction": 1e-3, "E_kinetic [J]": 5e-3,
+                      "D_fracture [J]": 5e-3, "interfaces_damaged": 0.01, "interfaces_failed": 0.02}
+
+
+def chaos_bounds(base, perturbed):
+    """The bounds for the fragmenting runs: FRAGMENTING_BOUNDS, or twice the largest deviation of the
+    runs on 1 process whose impact speed differs by 2.5e-13 of itself (round-off's scale) where that
+    is more (see FRAGMENTING: the run is chaotic, so a bound below that spread is luck's)."""
+    bounds = dict(FRAGMENTING_BOUNDS)
+    for got in perturbed:
+        dev = fragmenting_deviations(base, got)
+        if dev is None:
+            check(False, "fragmenting, the speed changed by 2.5e-13: rows differ from the base's")
+            continue
+        for key, d in dev.items():
+            bounds[key] = max(bounds[key], 2.0 * d)
+    print("  the speed changed by 2.5e-13 on 1 process: bounds " +
+          ", ".join(f"{k} {v:.2g}" for k, v in bounds.items()))
+    return bounds
+
+
+def compare_fragmenting(name, base, got):
+    """The fragmenting 3D impact against the run on 1 process (see FRAGMENTING); base is (histories,
+    bounds)."""
+    base, bounds = base
+    (h, a), (fh, fa) = base
+    (_, b), (_, fb) = got
+    dev = fragmenting_deviations(base, got)
+    if dev is None:
         check(False, f"{name}: rows {len(b)}, {len(fb)} against {len(a)}, {len(fa)}")
         return
-    j, k = fh.index("fragments"), fh.index("largest_fraction")
-    dn = max(abs(ra[j] - rb[j]) - max(2.0, 0.02 * ra[j]) for ra, rb in zip(fa, fb))
-    dl = max(abs(ra[k] - rb[k]) for ra, rb in zip(fa, fb))
-    check(dn <= 0 and dl < 1e-3,
-          f"{name}: {fb[-1][j]:.0f} fragments against {fa[-1][j]:.0f}, counts within 2 % in "
-          f"every row, largest fraction within {dl:.1e} (< 1e-3)")
-    within_largest(name, h, a, b, (("E_kinetic [J]", 5e-3), ("D_fracture [J]", 5e-3)))
-    for col, tol in (("interfaces_damaged", 0.01), ("interfaces_failed", 0.02)):
+    j = fh.index("fragments")
+    check(dev["fragments"] <= bounds["fragments"] and dev["largest_fraction"] <= bounds["largest_fraction"],
+          f"{name}: {fb[-1][j]:.0f} fragments against {fa[-1][j]:.0f}, counts within 2 % in every row "
+          f"(beyond it by {dev['fragments']:.0f} <= {bounds['fragments']:.0f}), largest fraction within "
+          f"{dev['largest_fraction']:.1e} (<= {bounds['largest_fraction']:.1e})")
+    for col in ("E_kinetic [J]", "D_fracture [J]"):
+        check(dev[col] <= bounds[col], f"{name}: {col} within {dev[col]:.1e} of its largest value "
+                                       f"(<= {bounds[col]:.1e})")
+    for col in ("interfaces_damaged", "interfaces_failed"):
         c = h.index(col)
-        check(abs(a[-1][c] - b[-1][c]) <= tol * a[-1][c] + 1,
-              f"{name}: {col} {b[-1][c]:.0f} against {a[-1][c]:.0f}")
+        check(dev[col] * a[-1][c] <= bounds[col] * a[-1][c] + 1,
+              f"{name}: {col} {b[-1][c]:.0f} against {a[-1][c]:.0f} (<= {bounds[col]:.1e} of it + 1)")
+
+
+def fragmenting_perturbed(fdem):
+    """The fragmenting run on 1 process with the impact speed 40 m/s changed by +-2.5e-13 of itself:
+    the chaos yardstick of chaos_bounds."""
+    got = []
+    for tag, speed in (("up", "40.00000000001"), ("down", "39.99999999999")):
+        out = os.path.join(WORK, f"fragmenting-1-{tag}")
+        r = run(fdem, 1, FRAGMENTING[0], FRAGMENTING[1] + [f"parameters.speed={speed}"], out)
+        check(r.returncode == 0, f"fragmenting, 1 process, speed {speed}: exit {r.returncode}")
+        if r.returncode == 0:
+            got.append((history(os.path.join(out, "history.csv")), history(os.path.join(out, "fragments.csv"))))
+        else:
+            print(r.stderr[-3000:])
+    return got
 
 
 def check_recuts(fdem, fragmenting_base):
@@ -376,6 +442,10 @@ def check_rebalance(fdem, fragmenting_base):
           f"({', '.join(on['cut_reasons'])}), {len(at)} excess(es) logged, {len(after)} after cuts and start")
     for k, (e, cut) in enumerate(zip(at, work_cuts)):
         a = after[cut + 1]
+        if a is None:  # the run ended (or was cut for the zones) before the first check after it
+            print(f"  --    {name}, rebalance {k + 1}: the excess {e:.3f}; no check of the balance after the cut")
+            check(0.1 < e, f"{name}, rebalance {k + 1}: the excess {e:.3f} (> 0.1)")
+            continue
         check(0.1 < e and a < 0.5 * e,
               f"{name}, rebalance {k + 1}: the excess {e:.3f} (> 0.1) became {a:.4f} after the cut (< half)")
     check(on["work_excess_largest"] < off["work_excess_largest"],
@@ -845,7 +915,7 @@ def main():
             continue
         got = (history(os.path.join(out, "history.csv")), history(os.path.join(out, "fragments.csv")))
         if n == 1:
-            base = got
+            base = (got, chaos_bounds(got, fragmenting_perturbed(fdem)))
             continue
         if base is None:
             continue
