@@ -335,14 +335,14 @@ ShearRun constant_normal_shear(int dim, double sigma, double phi_r_deg, double e
   return r;
 }
 
-// From the peak to the end, tau / sigma_n never falls below tan(phi_r) by more than `dip` (over
-// windows of 10 history rows: 50 us, 5 um of slip; the lowest single row is printed as
-// "instantaneous"), and it is tan(phi_r) within `tol` just before the handover and at the end; the
-// balance holds within 1 % of the work throughout. The dip is the handover's: the end nodes of the
-// two blocks, which the interface still paired with the other side's end although the blocks had
-// slid past each other, lose their support, and the upper block settles onto the contacts left
-// (measured: 2D 0.3 % at 1.5 MPa and 0.9 % at 4 MPa, single rows 1.8 - 2.1 %; 3D, 4 elements
-// across, 1.7 % and 3.3 %, single rows 10 - 11 %; the 2D body of interfaces 3.0 %).
+// From the peak to the end, tau / sigma_n never falls below tan(phi_r) by more than `dip` over
+// windows of 10 history rows (50 us, 5 um of slip), nor by more than twice that in any single row
+// ("instantaneous"), and it is tan(phi_r) within `tol` just before the handover and at the end;
+// the balance holds within 1 % of the work throughout. Measured: 2D and 3D, the lowest window and
+// row tan(phi_r) to four digits (with each node taking half of the energy at the handover: 0.3 -
+// 0.9 % in 2D, 1.7 - 3.3 % in 3D, single rows 10 %; docs/theory.md section 4); the 2D body of
+// interfaces 3.0 %, single rows 3.8 %, from the bounce after its 5 % drop of the normal stress at
+// the handover (the contacts' shear springs stick while the normal force rises).
 void check_residual_friction(int dim, double sigma, double phi_r_deg, bool body, double tol, double dip,
                              double end, const std::string& name) {
   const std::string dir = fdem::test::scratch_dir("joints", name);
@@ -382,6 +382,7 @@ void check_residual_friction(int dim, double sigma, double phi_r_deg, bool body,
   EXPECT_NEAR(r.tau[ip], c + r.sigma[ip] * tanphi, 0.03 * r.tau[ip]);
   EXPECT_GT(ih, ip + 10);
   EXPECT_GT(lowest, tanr * (1 - dip));  // no window without friction at any slip
+  EXPECT_GT(instant, tanr * (1 - 2 * dip));
   EXPECT_NEAR(before, tanr, tol * tanr);
   EXPECT_NEAR(after, tanr, tol * tanr);
   EXPECT_LT(worst, 0.01 * r.work.back());
@@ -389,12 +390,12 @@ void check_residual_friction(int dim, double sigma, double phi_r_deg, bool body,
 }
 
 TEST(Joints, CohesiveJointSlidesAtItsResidualFrictionThroughTheHandover2D) {
-  check_residual_friction(2, 1.5e6, 25, false, 0.005, 0.012, 0.02, "residual2_15");
-  check_residual_friction(2, 4e6, 25, false, 0.005, 0.012, 0.02, "residual2_40");
+  check_residual_friction(2, 1.5e6, 25, false, 0.005, 0.002, 0.02, "residual2_15");
+  check_residual_friction(2, 4e6, 25, false, 0.005, 0.002, 0.02, "residual2_40");
 }
 TEST(Joints, CohesiveJointSlidesAtItsResidualFrictionThroughTheHandover3D) {
-  check_residual_friction(3, 1.5e6, 25, false, 0.005, 0.04, 0.025, "residual3_15");
-  check_residual_friction(3, 4e6, 25, false, 0.005, 0.04, 0.025, "residual3_40");
+  check_residual_friction(3, 1.5e6, 25, false, 0.005, 0.002, 0.025, "residual3_15");
+  check_residual_friction(3, 4e6, 25, false, 0.005, 0.002, 0.025, "residual3_40");
 }
 // Inside a body whose own interfaces have phi 45 degrees (the contact law's default friction):
 // the joint keeps its own residual friction after the handover (within 1 %: the blocks, cut into

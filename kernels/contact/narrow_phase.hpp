@@ -123,23 +123,74 @@ struct PairSubset {
 };
 
 // What the interfaces handed over at this poll (icontact kHandedNow, hand_over_failed) leave to
-// one of their nodes: its share of their compressive penalty's energy (un) and of their friction
-// springs' energy (us) and force (F, on the node): half of each point's at its node pair, as the
-// contacts of the node against the other side's faces carry half the load (the contacts of the
-// other side's nodes carry the rest). The node's contacts start from it (contacts, contact_pair):
-// a new contact may start as deep as un explains, a contact that grows takes un as budget, and
-// each contact's shear spring starts with its share of F; what they do not take is dissipated.
-// A node whose contacts find no face under it (the end of a joint whose blocks have slid past
-// each other: the interface still paired the overhanging node with the other block's last node)
-// leaves its share to no one: the other block settles onto the contacts left (docs/theory.md
-// section 4, the dip this gives). Each node's seed comes from the interfaces' own state alone, so
-// every process that holds a node decides alike.
+// one of their nodes: its share of their compressive penalty's force (fn) and energy (un) and of
+// their friction springs' energy (us) and force (F, on the node). The node's contacts start from
+// it (contacts, contact_pair): a new contact may start as deep as carries fn (or stores un, where
+// that is less), a contact that grows takes un as budget, and each contact's shear spring starts
+// with its share of F; what they do not take is dissipated. Each node of a point's pair takes
+// half of the point's state (the contacts of the node against the other side's faces carry half
+// the load, those of the other side's nodes the rest), but for a node that overhangs
+// (seed_share): at the end of a joint whose blocks have slid past each other the interface still
+// paired a node beyond the other block's end with that block's last node; the overhanging node
+// finds no face under it, and its half would go to no one (the other block then settles onto the
+// contacts left, docs/theory.md section 4), so its partner takes the whole point's. Each node's
+// seed comes from the interfaces' state and the faces round the pair's nodes alone, which every
+// process that holds the node holds alike (they lie within the search distance of it: the
+// contact zone, docs/parallel.md).
 template <int D>
 struct HandoverSeed {
-  double un = 0, us = 0;
+  double un = 0, us = 0, fn = 0;  // fn: its share of the compressive penalty's force (magnitude)
   double F[D] = {};
   bool any = false;
 };
+
+// Whether node a overhangs in the direction t (a unit vector in the interface's plane, from its
+// partner to it): one of the outer faces round it (the mesh's boundary, not an interface's) faces
+// within 60 degrees of t, so that a beyond its partner lies outside the body its partner is on.
+template <int D>
+KOKKOS_INLINE_FUNCTION bool overhangs(const ContactSurface<D>& S, const Kokkos::View<double* [D]>& x, int a,
+                                      const double (&t)[D]) {
+  for (int j = S.nfoff(a); j < S.nfoff(a + 1); ++j) {
+    const int f = S.nface(j);
+    if (S.fiface(f) >= 0 || !S.factive(f)) continue;
+    double xf[D][D], n[D], d = 0;
+    for (int b = 0; b < D; ++b)
+      for (int i = 0; i < D; ++i) xf[b][i] = x(S.fnode(f, b), i);
+    face_normal<D>(xf, n);
+    for (int i = 0; i < D; ++i) d += n[i] * t[i];
+    if (d > 0.5) return true;
+  }
+  return false;
+}
+
+// The share of point k of interface q (nodes xa, xb; normal n) that its side-A node takes (side
+// B's takes 1 minus it): 1/2, or 0 where the A node overhangs and the B node does not, 1 the
+// other way round; 1/2 where the faces have not slid (the slip below 1e-9 of the face's size).
+template <int D>
+KOKKOS_INLINE_FUNCTION double seed_share(const ContactSurface<D>& S, const Kokkos::View<double* [D]>& x,
+                                         const InterfaceData<D>& in, int q, const double (&xa)[D][D],
+                                         const double (&xb)[D][D], const double (&n)[D], int k) {
+  double t[D], tn = 0, t2 = 0, size2 = 0;
+  for (int i = 0; i < D; ++i) {
+    t[i] = xa[k][i] - xb[k][i];
+    tn += t[i] * n[i];
+    const double e = xa[(k + 1) % D][i] - xa[k][i];
+    size2 += e * e;
+  }
+  for (int i = 0; i < D; ++i) {
+    t[i] -= tn * n[i];
+    t2 += t[i] * t[i];
+  }
+  if (!(t2 > 1e-18 * size2)) return 0.5;
+  const double il = 1.0 / kmath::sqrt(t2);
+  double back[D];
+  for (int i = 0; i < D; ++i) {
+    t[i] *= il;
+    back[i] = -t[i];
+  }
+  const bool a_over = overhangs<D>(S, x, in.iface(q, k), t), b_over = overhangs<D>(S, x, in.iface(q, D + k), back);
+  return a_over == b_over ? 0.5 : a_over ? 0.0 : 1.0;
+}
 
 template <int D>
 KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S, const InterfaceData<D>& in,
@@ -165,15 +216,19 @@ KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S,
       d[i] = xb[k][i] - xa[k][i];
       dn += d[i] * n[i];
     }
+    const double a_share = seed_share<D>(S, x, in, q, xa, xb, n, k);
+    const double w = side > 0.0 ? a_share : 1.0 - a_share;  // this node's share of the point's
+    if (!(w > 0.0)) continue;
     const CohesiveParams p = in.params(q);
     const double ap = in.iarea(q);
     r.any = true;
-    r.un += dn < 0.0 ? 0.25 * ap * p.kn * dn * dn : 0.0;
+    r.un += dn < 0.0 ? w * 0.5 * ap * p.kn * dn * dn : 0.0;
+    r.fn += dn < 0.0 ? -w * ap * p.kn * dn : 0.0;
     if (in.has_slip() && p.tanphir >= 0.0) {  // failed: the residual friction carries all the shear
       double e[D];
       const double e2 = elastic_slip<D>(n, d, load_slip<D>(in.islip, q, k), e);
-      r.us += 0.25 * ap * p.ks * e2;
-      for (int i = 0; i < D; ++i) r.F[i] += side * 0.5 * ap * p.ks * e[i];
+      r.us += w * 0.5 * ap * p.ks * e2;
+      for (int i = 0; i < D; ++i) r.F[i] += side * w * ap * p.ks * e[i];
     }
   }
   return r;
@@ -407,15 +462,20 @@ struct ContactForcesFn {
   //    node's contacts release in all is dissipated: the weights and allowances change the
   //    normal springs' energy at fixed positions, with no force doing work (a node sliding off
   //    the edge of the face it presses on: its weight fades out while compressed).
-  //    A node with a HandoverSeed: its new contacts may start as deep as the seed's un explains
-  //    over the node's area, its growing ones take their weight's share of un as budget, and each
-  //    contact's shear spring starts with its weight's share of F (cut so that the springs store
-  //    at most us); the seed is released here and what the contacts take is booked back.
+  //    A node with a HandoverSeed: its new contacts may start as deep as carries the seed's force
+  //    fn over the node's area (or stores its energy un, where that is less), its growing ones
+  //    take their weight's share of un as budget, and each contact's shear spring starts with
+  //    its weight's share of F (cut so that the springs store at most us); the seed is released
+  //    here and what the contacts take is booked back.
   template <class Force>
   KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const double (&xs)[D],
                                        const double (&vs)[D], double Anode, const HandoverSeed<D>& seed,
                                        ContactSums& sums) const {
-    const double seed_lim = seed.un > 0.0 ? kmath::sqrt(2.0 * seed.un / (L.kn * Anode)) : 0.0;
+    // a new contact starts as deep as carries the seed's force share, or as stores its energy
+    // share where that is less (a node whose contact area is smaller than the interface points'
+    // share: the rest comes as the body settles)
+    const double seed_lim =
+        seed.un > 0.0 ? kmin(kmath::sqrt(2.0 * seed.un / (L.kn * Anode)), seed.fn / (L.kn * Anode)) : 0.0;
     double seed_f[D], F2 = 0;
     for (int k = 0; k < D; ++k) F2 += seed.F[k] * seed.F[k];
     const double cs = F2 > 2.0 * L.ks * Anode * seed.us ? kmath::sqrt(2.0 * L.ks * Anode * seed.us / F2) : 1.0;
