@@ -370,9 +370,9 @@ void ContactSystem<D>::poll(const Model<D>& m) {
     // on one process handed over there; the plate load then differed by 8 %,
     // tests/mpi/check_runs.py). Looking costs a pass over the flags every kContactPollEvery steps.
     int pending = part_ ? 1 : 0;
-    if (ni_ > 0 && !part_) {
-      Kokkos::deep_copy(pending, m.icontact_pending);
-      ++syncs_;
+    if (ni_ > 0) {
+      if (!part_) Kokkos::deep_copy(pending, m.icontact_pending);
+      ++syncs_;  // (a part: the count of handovers read back)
     }
     if (pending) check_failures(m);
   }
