@@ -171,6 +171,23 @@ TEST(Joints, CaseKeysAreCheckedAgainstTheMesh) {
 
 // Runs the shear box `doc` (its regions, materials and loads set) on joint_square.geo (2D, plane
 // strain, thickness 1) or joint_box.geo (3D) until end_time, 4000 history rows, in dir/out.
+// The two blocks of joint_square.geo / joint_box.geo (regions lower and upper) joined by the joint
+// (interface material `joint`, on the surface "joint" only); the other interfaces' material
+// (none inserted unless fracture.regions names the blocks) has phi `rock_phi_deg`; no damping.
+json shear_box_case(const std::string& name, double rock_phi_deg, const json& joint) {
+  json doc = json::parse(R"({
+    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
+    "regions": {"lower": "rock", "upper": "rock"},
+    "interface_materials": {"rock_if": {"kn": 1e11, "ks": 1e11, "ft": 5e6, "c": 10e6, "Gnc": 10, "Gsc": 100}},
+    "fracture": {"regions": [], "interface_material": "rock_if", "surfaces": {"joint": "joint_if"}},
+    "damping": {"local": 0}
+  })");
+  doc["name"] = name;
+  doc["interface_materials"]["rock_if"]["phi_deg"] = rock_phi_deg;
+  doc["interface_materials"]["joint_if"] = joint;
+  return doc;
+}
+
 void run_shear_box(json& doc, int dim, double end_time, const std::string& dir) {
   doc["dimension"] = dim;
   doc["mesh"] = {{"file", data(dim == 2 ? "joint_square.geo" : "joint_box.geo")}};
@@ -197,16 +214,7 @@ struct Stresses {
 
 std::vector<Stresses> direct_shear(int dim, const json& joint, double vx, double vy, double end_time,
                                    const std::string& dir) {
-  json doc = json::parse(R"({
-    "name": "direct_shear",
-    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
-    "regions": {"lower": "rock", "upper": "rock"},
-    "interface_materials": {
-      "rock_if": {"kn": 1e11, "ks": 1e11, "ft": 5e6, "c": 10e6, "phi_deg": 20, "Gnc": 10, "Gsc": 100}},
-    "fracture": {"regions": [], "interface_material": "rock_if", "surfaces": {"joint": "joint_if"}},
-    "damping": {"local": 0}
-  })");
-  doc["interface_materials"]["joint_if"] = joint;
+  json doc = shear_box_case("direct_shear", 20, joint);
   const json v = dim == 2 ? json::array({vx, -vy}) : json::array({vx, 0.0, -vy});
   doc["boundary"] = {{"fixed", {{{"set", "region.lower"}}}},
                      {"velocity", {{{"set", "region.upper"}, {"velocity", v}}}}};
@@ -296,18 +304,9 @@ struct ShearRun {
 
 ShearRun constant_normal_shear(int dim, double sigma, double phi_r_deg, double end_time, bool body,
                                const std::string& dir) {
-  json doc = json::parse(R"({
-    "name": "direct_shear_constant_normal",
-    "materials": {"rock": {"density": 2500, "E": 30e9, "nu": 0.2}},
-    "regions": {"lower": "rock", "upper": "rock"},
-    "interface_materials": {
-      "rock_if": {"kn": 1e11, "ks": 1e11, "ft": 5e6, "c": 10e6, "phi_deg": 45, "Gnc": 10, "Gsc": 100},
-      "joint_if": {"kn": 1e11, "ks": 1e11, "ft": 1e6, "c": 1.5e6, "phi_deg": 33, "Gnc": 10, "Gsc": 100}},
-    "fracture": {"regions": [], "interface_material": "rock_if", "surfaces": {"joint": "joint_if"}},
-    "damping": {"local": 0}
-  })");
-  doc["interface_materials"]["joint_if"]["phi_r_deg"] = phi_r_deg;
-  doc["interface_materials"]["joint_if"]["law"] = "residual_friction";
+  const json joint = {{"kn", 1e11}, {"ks", 1e11}, {"ft", 1e6}, {"c", 1.5e6}, {"phi_deg", 33}, {"Gnc", 10},
+                      {"Gsc", 100}, {"phi_r_deg", phi_r_deg}, {"law", "residual_friction"}};
+  json doc = shear_box_case("direct_shear_constant_normal", 45, joint);
   if (body) doc["fracture"]["regions"] = {"lower", "upper"};
   const double area = dim == 2 ? 0.1 : 0.01;
   const json drive = dim == 2 ? json::array({0.1, 0.0}) : json::array({0.1, 0.0, 0.0});

@@ -23,8 +23,8 @@
 // Synchronisation (GPU readiness): a step waits for the device only on the steps that re-check
 // something on the host; there the host reads one small device value, labelled kContactSyncLabel
 // (two on a step that both polls the handover flag and re-checks the lists).
-// - The handover flag (set by the force kernel) every kContactPollEvery steps while interfaces are
-//   left. A step that hands interfaces over waits for the device like a rebuild (counts, sizes);
+// - The handover flag (set by the force kernel; a part of a run over processes reads the count of
+//   handovers instead) every kContactPollEvery steps while interfaces are left. A step that hands interfaces over waits for the device like a rebuild (counts, sizes);
 //   after a local update of the lists (no rebuild), the next step re-checks them (its status
 //   includes the new surface nodes).
 // - The status of the narrow phase (ContactStatus: totals and the largest displacement since the
@@ -78,7 +78,7 @@ class ContactSystem {
   // The step's poll (Simulation::step calls it before the internal forces, so that an interface
   // handed over at the poll acts no more in that step and its nodes' contacts take its state over
   // in that step's update; every kContactPollEvery steps while interfaces are left): hands failed
-  // interfaces over when the force kernel has flagged one.
+  // interfaces over when the force kernel has flagged one (one process) or at every poll (a part).
   void poll(const Model<D>& m);
   // One step at positions m.x and velocities m.v (v(n-1/2)) after the poll: rebuilds the
   // candidate lists when needed, adds the contact forces to sf (the force kernel's scatter view
