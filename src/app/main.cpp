@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -23,6 +24,7 @@
 #include "fdem_version.hpp"
 #include "parallel/comm.hpp"
 #include "parallel/partition.hpp"
+#include "solver/ensemble.hpp"
 #include "solver/run.hpp"
 #ifdef FDEM_HAVE_MPI
 #include "parallel/mpi/comm_mpi.hpp"
@@ -91,6 +93,7 @@ int requested_threads(int argc, char** argv) {
 // share core 0.
 void reexec_with_thread_binding(int argc, char** argv) {
   if (std::getenv("OMP_PROC_BIND") || std::getenv("FDEM_NO_REEXEC")) return;
+  if (argc > 1 && std::string(argv[1]) == "ensemble") return;  // (its realisations choose for themselves)
   cpu_set_t mask;
   CPU_ZERO(&mask);
   const int cores = sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
@@ -144,6 +147,8 @@ struct CliOptions {
   int parts = 0;                 // partition
   std::string method = "metis";  // partition
   std::string snapshot;          // partition
+  fdem::EnsembleOptions ensemble;
+  std::string vary;              // ensemble: comma-separated sources
 };
 
 // A finite time >= 0 in seconds, with a short message (CLI11's NonNegativeNumber prints the whole
@@ -158,6 +163,35 @@ CLI::Validator seconds_validator() {
         return "";
       },
       "SECONDS");
+}
+
+// `fdem ensemble` (src/solver/ensemble.hpp, docs/ensembles.md).
+void add_ensemble_subcommand(CLI::App& app, CliOptions& o) {
+  auto* ens = app.add_subcommand("ensemble",
+                                 "run N realisations of a case that differ in named random sources; "
+                                 "OUT/ensemble.csv and OUT/ensemble.json (docs/ensembles.md)");
+  fdem::EnsembleOptions& e = o.ensemble;
+  ens->add_option("case", o.case_path, "case file (JSON)")->required();
+  ens->add_option("--realisations,-n", e.realisations, "number of realisations N, 1 to 100000")->required();
+  ens->add_option("--out", o.out_dir, "output folder: OUT/r0000 ... and the report (required)")->required();
+  ens->add_option("--vary", o.vary,
+                  "comma-separated random sources: strength (the case's fracture.scatter seed), orientation "
+                  "(a random rotation of the mesh), mesh (interior node jitter), velocity (the initial "
+                  "velocity times 1 + size z); default: strength when the case has a scatter, else velocity");
+  ens->add_option("--seed", e.seed, "ensemble seed S (each realisation's seeds derive from S and its index)");
+  ens->add_option("--jobs,-j", e.jobs, "realisations run at once, each with its share of the cores (default 1)");
+  ens->add_option("--threads", e.threads,
+                  "threads per realisation (default: the cores available shared among the jobs; 1 makes "
+                  "the ensemble reproducible bit for bit)");
+  ens->add_option("--velocity-size", e.velocity_size,
+                  "velocity: relative standard deviation of the speed factor, in (0, 0.1] (default 1e-6)");
+  ens->add_option("--jitter", e.jitter, "mesh: node jitter amplitude in element edges, in (0, 0.5] (default 0.2)");
+  ens->add_option("--set", o.sets, "override a case field in every realisation: key.path=value (repeatable)");
+  ens->add_flag("--quiet", o.quiet, "no progress output");
+  ens->footer("Exit status: 0 every realisation done, 1 a realisation ended with an unexpected error, 2 bad "
+              "input (nothing written), 3 some realisations failed numerically (the report lists them), "
+              "130 / 143 stopped by SIGINT / SIGTERM: each running realisation wrote its checkpoint, and the "
+              "same command goes on from there.");
 }
 
 // The subcommands run, check and info with their options, stored into `o`.
@@ -196,6 +230,7 @@ void add_subcommands(CLI::App& app, CliOptions& o) {
   part->add_option("--snapshot", o.snapshot,
                    "also the rebalance at the last frame of this snapshots.h5 of a run of the case");
 
+  add_ensemble_subcommand(app, o);
   app.add_subcommand("info", "print version, Kokkos version, backends and threads");
 }
 
@@ -209,11 +244,36 @@ std::string process_prefix() {
   return g_comm && g_comm->size() > 1 ? "process " + std::to_string(g_comm->rank()) + ": " : "";
 }
 
+// `fdem ensemble`: one process (it starts the realisations' processes itself).
+int run_ensemble_command(const CliOptions& o) {
+  const char* world = std::getenv("OMPI_COMM_WORLD_SIZE");
+  if (!world) world = std::getenv("PMI_SIZE");
+  if (world && std::atoi(world) > 1)
+    throw fdem::InputError("fdem ensemble runs on one process: it starts its realisations itself; run it "
+                           "without mpirun");
+  fdem::EnsembleOptions e = o.ensemble;
+  e.case_path = o.case_path;
+  e.out_dir = o.out_dir;
+  e.sets = o.sets;
+  e.progress = !o.quiet;
+  e.interrupt = &g_interrupt;
+  std::stringstream vs(o.vary);
+  for (std::string v; std::getline(vs, v, ',');)
+    if (!v.empty()) e.vary.push_back(v);
+  char self[4096];
+  const ssize_t len = readlink("/proc/self/exe", self, sizeof self - 1);
+  if (len <= 0) throw std::runtime_error("cannot find the fdem executable (/proc/self/exe)");
+  e.binary.assign(self, static_cast<size_t>(len));
+  return fdem::run_ensemble(e);
+}
+
 // Runs the chosen subcommand; returns the exit status (see the top of this file).
 int dispatch(const CLI::App& app, const CliOptions& o) {
   try {
     if (app.got_subcommand("info")) {
       print_info();
+    } else if (app.got_subcommand("ensemble")) {
+      return run_ensemble_command(o);
     } else if (app.got_subcommand("check")) {
       auto report = fdem::check_case(o.case_path, o.sets, o.moduli);
       std::cout << report.dump(2) << "\n" << "case OK: " << o.case_path << "\n";
@@ -286,6 +346,12 @@ int main(int argc, char** argv) {
     return rc == 0 ? 0 : 2;
   }
 
+  // An ensemble runs no kernel itself and starts its realisations as processes of their own: no
+  // MPI and no Kokkos threads in it.
+  if (app.got_subcommand("ensemble")) {
+    watch_interrupts();
+    return dispatch(app, opts);
+  }
 #ifdef FDEM_HAVE_MPI
   g_comm = fdem::mpi_start(&argc, &argv);  // before Kokkos, which may pick a GPU per process
 #endif

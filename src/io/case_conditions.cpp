@@ -91,6 +91,13 @@ void read_initial_velocity(json& b, Case& c, const Reader& R) {
     v.velocity = R.vec(iv[i], p, "velocity", d);
     c.initial_velocities.push_back(v);
   }
+  // "boundary.initial_velocity_factor": every initial velocity times this factor (an ensemble's
+  // velocity perturbation, src/solver/ensemble.cpp); not written when absent (the same case hash).
+  if (b.contains("initial_velocity_factor")) {
+    const double f = R.number(b, P, "initial_velocity_factor", between(0.5, false, 2, false));
+    for (auto& v : c.initial_velocities)
+      for (double& x : v.velocity) x *= f;
+  }
 }
 
 // The first rule of "fracture" that gives interfaces a frictional joint material (ft = c = 0), as
@@ -144,7 +151,7 @@ void read_boundary(json& doc, Case& c, const Reader& R) {
   const int d = c.dim;
   json& b = R.object(doc, "", "boundary", false);
   const std::string P = "boundary";
-  R.keys(b, P, {"fixed", "velocity", "point_loads", "gravity", "initial_velocity"});
+  R.keys(b, P, {"fixed", "velocity", "point_loads", "gravity", "initial_velocity", "initial_velocity_factor"});
   read_fixed(b, c, R);
   read_velocity(b, c, R);
   read_point_loads(b, c, R);

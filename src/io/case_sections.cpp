@@ -312,11 +312,59 @@ void read_fracture(json& doc, Case& c, const Reader& R) {
   if (f.contains("scatter")) read_scatter(f, c, R);
 }
 
+// "mesh.rotation": {"angle_deg", "axis" (3D), "center"} and "mesh.jitter": {"amplitude", "seed"}:
+// what any mesh (file or generator) may take (src/mesh/mesh_transforms.cpp). Nothing is written
+// for a key that is absent (the same case hash as before).
+void read_mesh_transforms(json& m, MeshSpec& s, int d, const Reader& R) {
+  const std::string P = "mesh";
+  if (m.contains("rotation")) {
+    const std::string p = child(P, "rotation");
+    json& r = R.object(m, P, "rotation", true);
+    R.keys(r, p, d == 3 ? std::vector<std::string>{"angle_deg", "axis", "center"}
+                        : std::vector<std::string>{"angle_deg", "center"});
+    s.rotation_deg = R.number(r, p, "angle_deg", between(-360, true, 360, true));
+    if (d == 3) {
+      s.rotation_axis = R.vec(r, p, "axis", 3, std::nullopt);
+      const Vec3& u = s.rotation_axis;
+      if (!(u[0] * u[0] + u[1] * u[1] + u[2] * u[2] > 0))
+        R.fail(child(p, "axis"), "the axis is zero (allowed: any non-zero [x, y, z]; it is normalised)");
+    }
+    if (r.contains("center")) {  // else the centre of the mesh's bounding box
+      s.rotation_center = R.vec(r, p, "center", d, std::nullopt);
+      s.has_rotation_center = true;
+    }
+  }
+  if (m.contains("jitter")) {
+    const std::string p = child(P, "jitter");
+    json& j = R.object(m, P, "jitter", true);
+    R.keys(j, p, {"amplitude", "seed"});
+    s.jitter = R.number(j, p, "amplitude", between(0, true, 0.5, false));
+    s.jitter_seed = static_cast<unsigned long>(R.integer(j, p, "seed", 0, 4294967295L, 1));
+  }
+}
+
 }  // namespace
 
 void read_mesh(json& doc, Case& c, const Reader& R, const fs::path& base_dir, bool check_files) {
-  json& m = R.object(doc, "", "mesh", true);
+  json& whole = R.object(doc, "", "mesh", true);
   const std::string P = "mesh";
+  // The transforms apply to every kind: read here, and out of the way while the kind's reader
+  // checks its own keys.
+  read_mesh_transforms(whole, c.mesh, c.dim, R);
+  json transforms = json::object();
+  for (const char* k : {"rotation", "jitter"})
+    if (whole.contains(k)) {
+      transforms[k] = whole[k];
+      whole.erase(k);
+    }
+  struct PutBack {  // (also when a reader throws: the document stays whole)
+    json& m;
+    json& t;
+    ~PutBack() {
+      for (auto& [k, v] : t.items()) m[k] = v;
+    }
+  } put_back{whole, transforms};
+  json& m = whole;
   const bool has_file = m.contains("file"), has_gen = m.contains("generator");
   if (has_file && has_gen) R.fail(P, "give either 'file' or 'generator', not both");
   if (!has_file && !has_gen) {

@@ -54,6 +54,7 @@ HostMesh prepare_mesh(const Case& c) {
   using setup_times::Phase;
   Phase build("mesh");
   HostMesh mesh = build_mesh(c.mesh, c.dim);
+  transform_mesh(mesh, c.mesh);  // mesh.rotation, mesh.jitter
   build.stop();
   Phase checks("mesh_checks");
   const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";

@@ -200,6 +200,17 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
     top.push_back(fs.total_mass > 0 ? masses[i] / fs.total_mass : 0.0);
   std::vector<std::string> edges;
   for (int b = 0; b < kFragmentBins; ++b) edges.push_back(FragmentStats::bin_name(b));
+  // The cumulative mass distribution on a fixed grid, so that an ensemble can average it
+  // (src/solver/ensemble_report.cpp): the share of the mass in fragments of at least x of it, at
+  // x = 10^(-k/4), k = 0 ... 28 (1 down to 1e-7).
+  std::vector<double> at_least, held;
+  double sum = 0;
+  for (int k = 0, i = 0; k <= 28; ++k) {
+    const double x = std::pow(10.0, -0.25 * k);
+    for (; i < static_cast<int>(masses.size()) && masses[i] >= x * fs.total_mass; ++i) sum += masses[i];
+    at_least.push_back(x);
+    held.push_back(fs.total_mass > 0 ? sum / fs.total_mass : 0.0);
+  }
   nlohmann::json pb = per_body(sim);
   nlohmann::json out = {
       {"count", fs.count},
@@ -211,7 +222,8 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
       {"distribution",
        {{"bin_lower_edge", edges},
         {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
-        {"mass_fraction", std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}}};
+        {"mass_fraction", std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}},
+      {"cumulative_mass", {{"fragment_fraction_at_least", at_least}, {"mass_fraction", held}}}};
   if (!pb.is_null()) out["per_body"] = pb;
   return out;
 }
