@@ -41,9 +41,13 @@ QUANTITIES = [  # (key in ensemble.json results, label, scale for the table)
 ]
 
 
-def run_ensemble(a, factor, runs):
-    name = os.path.splitext(os.path.basename(os.path.dirname(os.path.abspath(a.case))))[0]
-    out = os.path.join(runs, f"{name}_s{factor:g}")
+def ensemble_dir(a, factor):
+    """RUNS/<case folder's name>_s<S>: the ensemble of one factor."""
+    return os.path.join(a.runs, f"{os.path.basename(os.path.dirname(os.path.abspath(a.case)))}_s{factor:g}")
+
+
+def run_ensemble(a, factor):
+    out = ensemble_dir(a, factor)
     cmd = [a.fdem, "ensemble", a.case, "-n", str(a.n), "--out", out, "--vary", a.vary, "--seed", str(a.seed),
            "--jobs", str(a.jobs), "--threads", "1", "--set", f"time.safety_factor={factor:g}",
            "--set", "output.snapshot_count=0"]
@@ -60,11 +64,6 @@ def run_ensemble(a, factor, runs):
 
 def within(mean, ci):
     return ci[0] <= mean <= ci[1]
-
-
-def worst_balance(r):
-    b = r["results"]["energy.balance_error_J"]
-    return max(abs(b["min"]), abs(b["max"]))
 
 
 def verdict(rows):
@@ -115,9 +114,8 @@ def table(rows, reasons):
     return "\n".join(lines)
 
 
-def wall_per_realisation(runs, row, a):
-    name = os.path.basename(os.path.dirname(os.path.abspath(a.case)))
-    out = os.path.join(runs, f"{name}_s{row['factor']:g}")
+def wall_per_realisation(row, a):
+    out = ensemble_dir(a, row["factor"])
     walls = []
     for i in range(a.n):
         p = os.path.join(out, f"r{i:04d}", "realisation.json")
@@ -181,8 +179,8 @@ def main():
     os.makedirs(a.runs, exist_ok=True)
     rows = []
     for f in factors:
-        r = run_ensemble(a, f, a.runs)
-        r["wall_per_realisation"] = wall_per_realisation(a.runs, r, a)
+        r = run_ensemble(a, f)
+        r["wall_per_realisation"] = wall_per_realisation(r, a)
         rows.append(r)
         print(f"S = {f:g}: {r['done']} done, {r['failed']} failed, {r['wall_seconds_this_call']:.0f} s", file=sys.stderr)
     report(rows, factors, a)

@@ -260,18 +260,6 @@ FaceKey face_key(const int* nodes, int dim) {
   return k;
 }
 
-// Lists per key in CSR form: off[k]..off[k+1] in `item` (counting sort by key, items in order).
-struct Csr {
-  std::vector<int> off, item;
-  template <class KeyOf>
-  Csr(int nkeys, int nitems, KeyOf key_of) : off(static_cast<std::size_t>(nkeys) + 1, 0), item(nitems) {
-    for (int i = 0; i < nitems; ++i) ++off[key_of(i) + 1];
-    for (int k = 0; k < nkeys; ++k) off[k + 1] += off[k];
-    std::vector<int> fill(off.begin(), off.end() - 1);
-    for (int i = 0; i < nitems; ++i) item[fill[key_of(i)]++] = i;
-  }
-};
-
 }  // namespace
 
 // A face is on the boundary when no other element has all its nodes and it is no side of an

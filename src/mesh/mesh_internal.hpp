@@ -20,6 +20,18 @@ namespace fdem::mesh_detail {
 inline constexpr int kFaces2[3][2] = {{0, 1}, {1, 2}, {2, 0}};
 inline constexpr int kFaces3[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
+// Lists per key in CSR form: off[k]..off[k+1] in `item` (counting sort by key, items in order).
+struct Csr {
+  std::vector<int> off, item;
+  template <class KeyOf>
+  Csr(int nkeys, int nitems, KeyOf key_of) : off(static_cast<std::size_t>(nkeys) + 1, 0), item(nitems) {
+    for (int i = 0; i < nitems; ++i) ++off[key_of(i) + 1];
+    for (int k = 0; k < nkeys; ++k) off[k + 1] += off[k];
+    std::vector<int> fill(off.begin(), off.end() - 1);
+    for (int i = 0; i < nitems; ++i) item[fill[key_of(i)]++] = i;
+  }
+};
+
 inline int faces_per_elem(int dim) { return dim + 1; }
 // Local node `k` (0..dim-1) of local face `f`.
 inline int face_node(int dim, int f, int k) { return dim == 2 ? kFaces2[f][k] : kFaces3[f][k]; }

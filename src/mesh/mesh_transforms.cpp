@@ -8,6 +8,7 @@
 
 #include "common/random.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/mesh_internal.hpp"
 
 namespace fdem {
 namespace {
@@ -31,11 +32,13 @@ void rotate(HostMesh& m, const MeshSpec& s) {
   P3 c = s.rotation_center;
   if (!s.has_rotation_center) {
     P3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (int n = 0; n < m.num_nodes(); ++n)
+    for (int n = 0; n < m.num_nodes(); ++n) {
+      const P3 x = point(m, n);
       for (int k = 0; k < m.dim; ++k) {
-        lo[k] = std::min(lo[k], point(m, n)[k]);
-        hi[k] = std::max(hi[k], point(m, n)[k]);
+        lo[k] = std::min(lo[k], x[k]);
+        hi[k] = std::max(hi[k], x[k]);
       }
+    }
     for (int k = 0; k < 3; ++k) c[k] = k < m.dim ? 0.5 * (lo[k] + hi[k]) : 0.0;
   }
   P3 u = m.dim == 2 ? P3{0, 0, 1} : s.rotation_axis;
@@ -94,12 +97,11 @@ P3 ball_draw(unsigned long seed, int n, int dim) {
 
 long jitter(HostMesh& m, const MeshSpec& s) {
   const int nn = m.num_nodes(), ne = m.num_elems(), npe = m.dim + 1;
-  std::vector<int> off(nn + 1, 0), item(static_cast<std::size_t>(ne) * npe);
-  for (int v : m.elems) ++off[v + 1];
-  for (int n = 0; n < nn; ++n) off[n + 1] += off[n];
-  std::vector<int> fill(off.begin(), off.end() - 1);
-  for (int e = 0; e < ne; ++e)
-    for (int a = 0; a < npe; ++a) item[fill[m.elems[static_cast<std::size_t>(e) * npe + a]]++] = e;
+  // the elements at each node: node_elems.item holds entries of m.elems (element = entry / npe)
+  const mesh_detail::Csr node_elems(nn, ne * npe, [&](int i) { return m.elems[i]; });
+  const std::vector<int>& off = node_elems.off;
+  std::vector<int> item(node_elems.item.size());
+  for (size_t j = 0; j < item.size(); ++j) item[j] = node_elems.item[j] / npe;
   std::vector<double> floor(ne);
   for (int e = 0; e < ne; ++e) floor[e] = 0.7 * altitude(m, e);
   const std::vector<char> fixed = fixed_nodes(m);

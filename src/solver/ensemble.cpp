@@ -16,9 +16,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <map>
-#include <sstream>
 #include <thread>
 
 #include "common/error.hpp"
@@ -32,38 +29,10 @@ namespace {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-std::string num(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 std::string fixed3(double v) {
   char b[40];
   std::snprintf(b, sizeof b, "%.3f", v);
   return b;
-}
-
-std::string folder_of(const std::string& dir, long i) {
-  char b[32];
-  std::snprintf(b, sizeof b, "/r%04ld", i);
-  return dir + b;
-}
-
-std::string read_text(const std::string& path) {
-  std::ifstream f(path);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
-json read_json(const std::string& path) {
-  if (!fs::exists(path)) return nullptr;
-  try {
-    return json::parse(read_text(path));
-  } catch (const json::exception&) {
-    return nullptr;  // (a file cut short by a kill: as if absent)
-  }
 }
 
 // A standard normal number from a stream (Box-Muller; the project's own uniforms, so every
@@ -122,7 +91,7 @@ Realisation plan_realisation(const EnsembleOptions& o, long i, int dim) {
     } else {
       SplitMixStream rng(s);
       const double f = 1 + o.velocity_size * normal(rng);
-      r.sets.push_back("boundary.initial_velocity_factor=" + num(f));
+      r.sets.push_back("boundary.initial_velocity_factor=" + exact_number(f));
       r.values.emplace_back("velocity_factor", f);
     }
   }
@@ -143,9 +112,9 @@ void check_options(EnsembleOptions& o, const Case& c) {
     throw InputError("--threads: " + std::to_string(o.threads) + " is out of range (allowed: 1 to 4096; 0: the "
                      "cores available shared among the jobs)");
   if (!(o.velocity_size > 0 && o.velocity_size <= 0.1))
-    throw InputError("--velocity-size: " + num(o.velocity_size) + " is out of range (allowed: > 0 and <= 0.1)");
+    throw InputError("--velocity-size: " + exact_number(o.velocity_size) + " is out of range (allowed: > 0 and <= 0.1)");
   if (!(o.jitter > 0 && o.jitter <= 0.5))
-    throw InputError("--jitter: " + num(o.jitter) + " is out of range (allowed: > 0 and <= 0.5)");
+    throw InputError("--jitter: " + exact_number(o.jitter) + " is out of range (allowed: > 0 and <= 0.5)");
   if (o.vary.empty()) o.vary = {c.scatter.distribution.empty() ? "velocity" : "strength"};
   for (size_t k = 0; k < o.vary.size(); ++k) {
     const std::string& v = o.vary[k];
@@ -182,7 +151,7 @@ void prepare_folder(const EnsembleOptions& o, const json& plan) {
   const std::string path = o.out_dir + "/ensemble_plan.json";
   std::error_code ec;
   if (fs::exists(o.out_dir, ec) && !fs::is_empty(o.out_dir, ec)) {
-    const json old = read_json(path);
+    const json old = read_json_file(path);
     if (old.is_null())
       throw InputError("--out " + o.out_dir + ": the folder holds files but no ensemble_plan.json: not an "
                        "ensemble's folder (give a new or empty folder)");
@@ -216,7 +185,7 @@ int cores_available() {
 // to run.log there. The child has its own process group (a terminal's Ctrl-C reaches only the
 // ensemble, which passes one signal on) and gets SIGTERM if the ensemble dies.
 pid_t start_child(const EnsembleOptions& o, const Realisation& r, int threads, bool restart) {
-  const std::string dir = folder_of(o.out_dir, r.index);
+  const std::string dir = realisation_folder(o.out_dir, r.index);
   fs::create_directories(dir);
   std::vector<std::string> args = {o.binary, "run", o.case_path, "--out", dir, "--quiet",
                                    "--kokkos-threads=" + std::to_string(threads)};
@@ -250,14 +219,14 @@ void record(const EnsembleOptions& o, const Realisation& r, int status, double w
   for (const auto& [k, v] : r.seeds) seeds[k] = v;
   for (const auto& [k, v] : r.values) values[k] = v;
   const std::string st = status == 0 ? "done" : status == 3 ? "failed" : "error";
-  write_file_atomic(folder_of(o.out_dir, r.index) + "/realisation.json",
+  write_file_atomic(realisation_folder(o.out_dir, r.index) + "/realisation.json",
                     json{{"index", r.index}, {"status", st}, {"exit_status", status},
                          {"seeds", seeds}, {"values", values}, {"sets", r.sets},
                          {"wall_seconds", wall}}.dump(2) + "\n");
 }
 
 std::string finished(const EnsembleOptions& o, long i) {
-  const json rec = read_json(folder_of(o.out_dir, i) + "/realisation.json");
+  const json rec = read_json_file(realisation_folder(o.out_dir, i) + "/realisation.json");
   const std::string st = rec.is_object() ? rec.value("status", "") : "";
   return st == "error" ? "" : st;  // (an error is run again)
 }
@@ -265,14 +234,13 @@ std::string finished(const EnsembleOptions& o, long i) {
 struct Progress {
   long total = 0, done_before = 0, done = 0;
   double wall_sum = 0;
-  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
 };
 
 void report_progress(const EnsembleOptions& o, const Progress& p, long index, int status, double wall,
                      long running, long left) {
   if (!o.progress) return;
   std::string what = status == 0 ? "done" : status == 3 ? "FAILED (numerical failure)" : "ERROR";
-  const json s = read_json(folder_of(o.out_dir, index) + "/summary.json");
+  const json s = read_json_file(realisation_folder(o.out_dir, index) + "/summary.json");
   if (status == 0 && s.is_object() && s.contains("fragments") && s["fragments"].is_object())
     what += ": " + std::to_string(s["fragments"].value("count", 0L)) + " fragments, largest " +
             fixed3(s["fragments"].value("largest_fraction", 0.0));
@@ -280,7 +248,7 @@ void report_progress(const EnsembleOptions& o, const Progress& p, long index, in
                                       std::max(1, o.jobs) : 0;
   std::printf("[%ld/%ld] r%04ld %s in %.1f s; %ld running, %ld waiting%s\n", p.done_before + p.done,
               p.total, index, what.c_str(), wall, running, left,
-              left + running > 0 ? (", about " + num(std::round(eta)) + " s more").c_str() : "");
+              left + running > 0 ? (", about " + exact_number(std::round(eta)) + " s more").c_str() : "");
   std::fflush(stdout);
 }
 
@@ -298,7 +266,7 @@ bool run_children(const EnsembleOptions& o, int dim) {
   for (long i = 0; i < o.realisations; ++i) {
     if (!finished(o, i).empty()) continue;
     // A run that ended before the ensemble could record it (killed in between): its summary says so.
-    const json s = read_json(folder_of(o.out_dir, i) + "/summary.json");
+    const json s = read_json_file(realisation_folder(o.out_dir, i) + "/summary.json");
     const std::string why = s.is_object() ? s.value("stop_reason", "") : "";
     if (why == "end_time" || why == "max_steps" || why == "load_drop")
       record(o, plan_realisation(o, i, dim), 0, s.value("wall_seconds", 0.0));
@@ -320,7 +288,7 @@ bool run_children(const EnsembleOptions& o, int dim) {
     if (sig) stop_children(running, sig, passed);
     while (!sig && ok && next < todo.size() && static_cast<int>(running.size()) < o.jobs) {
       const long i = todo[next++];
-      const bool restart = fs::exists(folder_of(o.out_dir, i) + "/checkpoint.h5");
+      const bool restart = fs::exists(realisation_folder(o.out_dir, i) + "/checkpoint.h5");
       running.push_back({start_child(o, plan_realisation(o, i, dim), threads, restart), i,
                          std::chrono::steady_clock::now(), restart});
     }
@@ -338,7 +306,7 @@ bool run_children(const EnsembleOptions& o, int dim) {
     const int status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - c.start).count();
     if (status == 2 && c.restarted && !sig) {  // a checkpoint it could not go on from: start afresh
-      fs::remove(folder_of(o.out_dir, c.index) + "/checkpoint.h5");
+      fs::remove(realisation_folder(o.out_dir, c.index) + "/checkpoint.h5");
       todo.push_back(c.index);
       continue;
     }
@@ -347,7 +315,7 @@ bool run_children(const EnsembleOptions& o, int dim) {
     if (status != 0 && status != 3) {
       ok = false;
       std::fprintf(stderr, "error: realisation %ld ended with exit status %d; its log: %s/run.log\n", c.index,
-                   status, folder_of(o.out_dir, c.index).c_str());
+                   status, realisation_folder(o.out_dir, c.index).c_str());
     }
     ++p.done;
     p.wall_sum += wall;

@@ -61,4 +61,11 @@ nlohmann::json write_ensemble_report(const std::string& dir, long n, const nlohm
 std::vector<std::pair<std::string, double>> ensemble_results(const nlohmann::json& summary);
 std::vector<std::pair<std::string, double>> ensemble_timings(const nlohmann::json& summary);
 
+// Shared by the ensemble's two files (defined in src/solver/ensemble_report.cpp): realisation i's
+// folder DIR/r000i, a JSON file read back (null when absent or cut short by a kill), and a number
+// written with every digit (%.17g: reads back to the same double).
+std::string realisation_folder(const std::string& dir, long i);
+nlohmann::json read_json_file(const std::string& path);
+std::string exact_number(double v);
+
 }  // namespace fdem

@@ -21,24 +21,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 using Values = std::vector<std::pair<std::string, double>>;
 
-json read_json(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) return nullptr;
-  std::stringstream s;
-  s << f.rdbuf();
-  try {
-    return json::parse(s.str());
-  } catch (const json::exception&) {
-    return nullptr;
-  }
-}
-
-std::string folder_of(const std::string& dir, long i) {
-  char b[32];
-  std::snprintf(b, sizeof b, "/r%04ld", i);
-  return dir + b;
-}
-
 void add(Values& out, const json& j, const std::string& key, const std::string& name) {
   if (j.is_object() && j.contains(key) && j[key].is_number()) out.emplace_back(name, j[key].get<double>());
 }
@@ -58,12 +40,6 @@ json stats_json(const std::vector<double>& x) {
           {"ci95", {s.ci_low, s.ci_high}}, {"min", s.min}, {"max", s.max}};
 }
 
-std::string cell(double v) {
-  char b[40];
-  std::snprintf(b, sizeof b, "%.17g", v);
-  return b;
-}
-
 // One realisation as read back: its record and, when done, its summary.
 struct Row {
   long index = 0;
@@ -76,14 +52,14 @@ struct Row {
 Row read_row(const std::string& dir, long i) {
   Row r;
   r.index = i;
-  const json rec = read_json(folder_of(dir, i) + "/realisation.json");
+  const json rec = read_json_file(realisation_folder(dir, i) + "/realisation.json");
   if (!rec.is_object()) return r;
   r.status = rec.value("status", "");
   const json seeds = rec.value("seeds", json::object()), values = rec.value("values", json::object());
   for (const auto& [k, v] : seeds.items()) r.seeds.emplace_back(k, v.get<std::uint64_t>());
   for (const auto& [k, v] : values.items()) r.inputs.emplace_back(k, v.get<double>());
   if (r.status != "done") return r;
-  const json s = read_json(folder_of(dir, i) + "/summary.json");
+  const json s = read_json_file(realisation_folder(dir, i) + "/summary.json");
   r.results = ensemble_results(s);
   r.timings = ensemble_timings(s);
   if (s.contains("fragments") && s["fragments"].is_object() && s["fragments"].contains("cumulative_mass"))
@@ -117,7 +93,7 @@ void write_csv(const std::string& dir, const std::vector<Row>& rows, const std::
         {&in, &Row::inputs}, {&res, &Row::results}, {&tim, &Row::timings}};
     for (const auto& [cols, member] : parts) {
       const auto m = as_map(r.*member);
-      for (const auto& k : *cols) text += "," + (m.count(k) ? cell(m.at(k)) : "");
+      for (const auto& k : *cols) text += "," + (m.count(k) ? exact_number(m.at(k)) : "");
     }
     text += "\n";
   }
@@ -163,6 +139,30 @@ json distribution_stats(const std::vector<Row>& rows) {
 }
 
 }  // namespace
+
+std::string realisation_folder(const std::string& dir, long i) {
+  char b[32];
+  std::snprintf(b, sizeof b, "/r%04ld", i);
+  return dir + b;
+}
+
+json read_json_file(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) return nullptr;
+  std::stringstream s;
+  s << f.rdbuf();
+  try {
+    return json::parse(s.str());
+  } catch (const json::exception&) {
+    return nullptr;
+  }
+}
+
+std::string exact_number(double v) {
+  char b[40];
+  std::snprintf(b, sizeof b, "%.17g", v);
+  return b;
+}
 
 std::vector<std::pair<std::string, double>> ensemble_results(const json& s) {
   Values out;
