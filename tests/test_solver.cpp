@@ -7,6 +7,7 @@
 #include "common/error.hpp"
 #include "scenes.hpp"
 #include "solver/simulation.hpp"
+#include "solver/stable_step.hpp"
 #include "solver_fixtures.hpp"
 
 namespace {
@@ -273,6 +274,41 @@ TEST(Solver, TimeStepAboveLimitIsDetected) {
   EXPECT_NE(msg.find("step"), std::string::npos) << msg;
   EXPECT_NE(msg.find("time"), std::string::npos) << msg;
   EXPECT_LT(sim.step_count, 20000);
+}
+
+// With contact, the estimate with a crack face's contact and interface springs summed
+// (docs/robustness.md section 1.9), on the 3D impact's contributions at h = 6 mm (its summary.json):
+// bulk 239 ns, interface springs 194 ns, contact springs 103 ns: the critical step with contact
+// 94.6 ns, the summed one 0.8986 of it; and the warning when the step after contact is above it.
+TEST(Solver, SummedSpringEstimateWithContact) {
+  StepContributions c;
+  c.bulk = 2.3929381501737205e-07;
+  c.interfaces = 1.9373209123767233e-07;
+  c.contact = 1.0299351193852324e-07;
+  c.has_contact = true;
+  c.may_meet = true;  // (surfaces can meet from the start: the contact springs count at once)
+  c.safety = 0.3;
+  const TimeStep ts = decide_stable_step(c);
+  const double pair = 1.0 / std::sqrt(1.0 / (c.bulk * c.bulk) + 1.0 / (c.contact * c.contact));
+  const double summed = 1.0 / std::sqrt(1.0 / (c.bulk * c.bulk) + 1.0 / (c.interfaces * c.interfaces) +
+                                        1.0 / (c.contact * c.contact));
+  EXPECT_NEAR(ts.stable.critical_contact, pair, 1e-12 * pair);
+  EXPECT_NEAR(ts.stable.critical_contact, 9.460301921775611e-08, 1e-20);  // summary.json of the run
+  EXPECT_NEAR(ts.stable.critical_summed, summed, 1e-12 * summed);
+  EXPECT_NEAR(ts.stable.critical_summed, 8.500898687643594e-08, 1e-20);      // and its summed one
+  EXPECT_NEAR(ts.stable.critical_summed / ts.stable.critical_contact, 0.8986, 1e-4);
+  EXPECT_DOUBLE_EQ(ts.dt, 0.3 * pair);  // the step itself is unchanged
+  EXPECT_EQ(contact_step_warning(ts.stable, 0.3, 0), "");
+  EXPECT_EQ(contact_step_warning(ts.stable, 0.89, 0), "");
+  const std::string w = contact_step_warning(ts.stable, 0.9, 0);
+  EXPECT_NE(w.find("time.safety_factor 0.9"), std::string::npos) << w;
+  EXPECT_NE(w.find("at most 0.8986"), std::string::npos) << w;
+  EXPECT_EQ(contact_step_warning(ts.stable, 0.9, 0.5 * summed), "");  // time.dt keeps it below
+  // without contact there is nothing to sum
+  c.has_contact = false;
+  const TimeStep alone = decide_stable_step(c);
+  EXPECT_DOUBLE_EQ(alone.stable.critical_summed, alone.stable.critical);
+  EXPECT_EQ(contact_step_warning(alone.stable, 2.0, 0), "");
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
+#include "solver/stable_step.hpp"
 #include "solver/summary.hpp"
 #include "solver/whole_state.hpp"
 
@@ -50,6 +51,10 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
+  // quiet or not, on process 0 (a restart says it again)
+  const std::string step_warning = contact_step_warning(sim_.stable, c.safety_factor, c.dt);
+  if (writes_ && !began_at_cut() && !step_warning.empty())
+    std::fprintf(stderr, "fdem: warning: %s\n", step_warning.c_str());
 }
 
 // For summary.json and the checkpoint header. A process of several that holds no whole mesh (not

@@ -20,6 +20,13 @@ TimeStep decide_stable_step(const StepContributions& c, bool contact_now, double
                            (std::isfinite(springs) ? 1.0 / (springs * springs) : 0.0));
   };
   s.critical_contact = combine(s.springs_contact);
+  s.critical_summed = s.critical_contact;
+  if (c.has_contact) {  // the contact springs and the interface springs of a crack face's node at once
+    double inv2 = 1.0 / (s.bulk * s.bulk);
+    for (double t : {c.interfaces, c.contact})
+      if (std::isfinite(t)) inv2 += 1.0 / (t * t);
+    s.critical_summed = std::min(s.critical_contact, 1.0 / std::sqrt(inv2));
+  }
   // Until surfaces can meet (a single body whose interfaces are all intact) the contact springs
   // and the platens' springs on crack faces act on nothing: the step is set without them.
   s.contact_pending = c.has_contact && !c.may_meet && s.springs_contact < s.springs;
@@ -49,6 +56,19 @@ std::string num(double v) {
   return buf;
 }
 }  // namespace
+
+std::string contact_step_warning(const StableStep& stable, double safety, double dt_cap) {
+  if (!(stable.critical_summed > 0) || !(stable.critical_summed < stable.critical_contact)) return "";
+  double dt = safety * stable.critical_contact;
+  if (dt_cap > 0) dt = std::min(dt, dt_cap);
+  if (!(dt > stable.critical_summed)) return "";
+  const double ratio = stable.critical_summed / stable.critical_contact;
+  return "the time step once surfaces meet, " + num(dt) + " s (time.safety_factor " + num(safety) +
+         " x the critical step with contact " + num(stable.critical_contact) + " s), is above " +
+         num(stable.critical_summed) + " s, the estimate with a crack face's contact and interface springs summed (" +
+         num(ratio) + " of the critical step), from about 1.1 times which fragmenting runs have blown up "
+         "(docs/robustness.md section 1.9): a time.safety_factor of at most " + num(ratio) + " stays below it";
+}
 
 void check_step_count(const std::string& file, double dt, double end_time, long max_steps,
                       const StableStep& stable) {

@@ -18,6 +18,16 @@ struct StableStep {
   // is not shortened by springs that do not act (contact_pending).
   double springs_contact = 0, critical_contact = 0;
   bool contact_pending = false;
+  // With contact: the estimate with a node's contact springs and its interface springs summed,
+  // (1/bulk^2 + 1/interfaces^2 + 1/contact^2)^(-1/2), instead of the stiffer kind alone. Once
+  // fragments touch, a node on a crack face carries both at once: the 3D impact's runs held to
+  // 1.0 - 1.03 of this estimate and blew up from 1.11 - 1.14 of it, with stiff or soft interfaces,
+  // while against critical_contact they blew up at 1.0 with the one and held there with the other
+  // (docs/robustness.md section 1.9). Not the step (it would shorten every fragmenting run's step
+  // by 10 - 16 % and move every published figure, while the cases' factors, chosen for accuracy,
+  // sit 2 - 3 times below it); the solver warns when the step after contact is above it
+  // (contact_step_warning). critical_contact without contact.
+  double critical_summed = 0;
 };
 
 // Every contribution to the stable step (s), each the smallest over its items: a bulk element's
@@ -80,6 +90,11 @@ struct TimeStep {
 // present step dt_now: the same fraction of the critical step with contact as before; a case's
 // time.dt stays the limit.
 TimeStep decide_stable_step(const StepContributions& c, bool contact_now = false, double dt_now = 0);
+
+// A warning (empty if none) when the step the run takes once surfaces can meet (safety *
+// critical_contact, or time.dt where that is smaller: dt_cap > 0) is above stable.critical_summed,
+// where fragmenting runs have blown up (docs/robustness.md section 1.9).
+std::string contact_step_warning(const StableStep& stable, double safety, double dt_cap);
 
 // Most steps a run may take: 1e12. The smallest test case (the 40-element bar of
 // tests/data/cases/bar.json) takes about 45 microseconds a step on one core (docs/developing.md,

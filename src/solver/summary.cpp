@@ -36,6 +36,9 @@ nlohmann::json stable_report(const Simulation<D>& sim) {
                       {"dt_springs_s", std::isfinite(sim.stable.springs) ? sim.stable.springs : 0.0}};
   // with contact that cannot act yet: the step once surfaces can meet
   if (sim.stable.contact_pending) j["dt_critical_with_contact_s"] = sim.stable.critical_contact;
+  // with contact: the estimate with a crack face's contact and interface springs summed
+  if (sim.stable.critical_summed > 0 && sim.stable.critical_summed < sim.stable.critical_contact)
+    j["dt_critical_summed_s"] = sim.stable.critical_summed;
   // the step changed during the run (contact's springs applied)
   if (sim.dt_changed_at() >= 0) {
     j["dt_before_contact_s"] = sim.dt_before_change();
