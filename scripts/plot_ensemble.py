@@ -27,8 +27,13 @@ DEFAULT_KEYS = ["fragments.largest_fraction", "fragments.count_at_least_1pct", "
 
 
 def t975(nu):
-    """Student's t quantile t(0.975, nu) (bisection on the CDF by the incomplete beta function's
-    continued fraction; the same values as fdem's)."""
+    """Student's t quantile t(0.975, nu)."""
+    return t_quantile(0.975, nu)
+
+
+def t_quantile(p, nu):
+    """Student's t quantile t(p, nu), p > 0.5 (bisection on the CDF by the incomplete beta
+    function's continued fraction; the same values as fdem's; tests/mpi/check_runs.py uses it)."""
     def betacf(a, b, x):
         c, d = 1.0, 1 - (a + b) * x / (a + 1)
         d = 1 / (d if abs(d) > 1e-300 else 1e-300)
@@ -60,11 +65,11 @@ def t975(nu):
         return 1 - tail if t >= 0 else tail
 
     lo, hi = 0.0, 1.0
-    while cdf(hi) < 0.975:
+    while cdf(hi) < p:
         hi *= 2
     for _ in range(200):
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if cdf(mid) < 0.975 else (lo, mid)
+        lo, hi = (mid, hi) if cdf(mid) < p else (lo, mid)
     return 0.5 * (lo + hi)
 
 

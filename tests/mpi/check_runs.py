@@ -56,13 +56,14 @@ hang.
 """
 import csv
 import json
-import math
 import os
 import shutil
 import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "scripts"))
+from plot_ensemble import t_quantile  # noqa: E402 (Student's t, as fdem ensemble's)
 WORK = os.path.join(ROOT, "build", "mpi-check")
 COMMON = ['contact={"enabled": false}']
 # The impacts run at their cases' own safety factor. Up to their first failed interface the runs
@@ -75,32 +76,6 @@ PERTURBED = ["1.0000000000001", "0.9999999999999", "1.0000000000002", "0.9999999
 ENSEMBLES = {}  # case name -> the histories of its PERTURBED runs on one process
 FRAGMENT_ENSEMBLES = {}  # case name -> their fragments.csv rows
 
-
-def t_two_sided(t, df):
-    """P(|T| <= t) for Student's t with integer df (Abramowitz and Stegun 26.7.3 and 26.7.4)."""
-    th = math.atan(t / math.sqrt(df))
-    c2, s = math.cos(th) ** 2, math.sin(th)
-    total = 0.0
-    if df % 2:
-        term = math.cos(th)
-        for k in range(1, (df - 1) // 2 + 1):
-            total += term
-            term *= c2 * (2 * k) / (2 * k + 1)
-        return 2 / math.pi * (th + s * total)
-    term = 1.0
-    for k in range(1, df // 2 + 1):
-        total += term
-        term *= c2 * (2 * k - 1) / (2 * k)
-    return s * total
-
-
-def t_quantile(p, df):
-    """The p quantile of Student's t (p > 0.5) by bisection: t_quantile(0.975, 4) = 2.776."""
-    lo, hi = 0.0, 1e4
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if t_two_sided(mid, df) < 2 * p - 1 else (lo, mid)
-    return 0.5 * (lo + hi)
 PARALLEL_HDF5 = False  # each process writes its rows of the snapshots and checkpoints (fdem info; main)
 CASES = {
     # the Brazilian disc, coarse and loaded fast from contact: intact, first damage near step 250,
