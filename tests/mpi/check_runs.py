@@ -899,8 +899,8 @@ def compare_fragment_rows(name, n, base, got, ensemble=None):
                 max(abs(ra[k] - rb[k]) for ra, rb in zip(fa[split:], rows[split:])))
     dc, dl = worst(fb)
     yard = [worst(e) for e in ensemble if len(e) == len(fa)]
-    bc = max(2.0, 0.02 * fa[-1][j], 2.0 * max(y[0] for y in yard))
-    bl = max(1e-6, 2.0 * max(y[1] for y in yard))
+    bc = max(2.0, 0.02 * fa[-1][j], 2.0 * max((y[0] for y in yard), default=0.0))
+    bl = max(1e-6, 2.0 * max((y[1] for y in yard), default=0.0))
     check(same and dc <= bc and dl <= bl,
           f"{name}, {n} processes: fragments.csv, the same counts up to the second fragment (row {split}), then "
           f"within {dc:.0f} fragments (<= {bc:.0f}: twice the perturbed runs' departure, at least 2 or 2 %) and the "
