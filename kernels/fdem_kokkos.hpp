@@ -88,6 +88,17 @@ constexpr int kScatterChunk = 256;
 template <int D>
 using ForceScatter = Kokkos::Experimental::ScatterView<double* [D]>;
 
+// Launch bounds of the heaviest kernels on CUDA (the interface forces, the narrow phase): at most
+// 128 threads per block and at least 4 (FDEM_CUDA_OCCUPANCY 25, the build's default) or 8 (50)
+// resident blocks per multiprocessor, so that the compiler keeps each thread within 128 or 64 of
+// the multiprocessor's 65536 registers (25 or 50 % theoretical occupancy; docs/cuda.md, "Kernel
+// resources"). Host backends ignore them.
+#ifndef FDEM_CUDA_OCCUPANCY
+#define FDEM_CUDA_OCCUPANCY 25
+#endif
+using HeavyLaunchBounds = Kokkos::LaunchBounds<128, (FDEM_CUDA_OCCUPANCY >= 50 ? 8 : 4)>;
+using ForceLaunchBounds = HeavyLaunchBounds;
+
 }  // namespace fdem
 
 namespace Kokkos {

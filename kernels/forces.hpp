@@ -1,7 +1,7 @@
 #pragma once
 // The internal forces of one explicit step (docs/theory.md sections 2 to 4): bulk elements
-// (kernels/elastic.hpp) and cohesive interfaces (kernels/interface.hpp) in one fused pass that
-// scatters into the nodal forces.
+// (kernels/elastic.hpp) and cohesive interfaces (kernels/interface.hpp), scattered into the nodal
+// forces: on host backends in one fused pass over element chunks, elsewhere in two kernels.
 #include "kernels/cohesive.hpp"
 #include "kernels/elastic.hpp"
 #include "kernels/interface.hpp"
@@ -14,25 +14,14 @@ namespace fdem {
 constexpr int kChunk =
     Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? kScatterChunk : 1;
 
-// Work item c of the force pass. fused (host backends): element chunk c and the interfaces whose
-// side A lies in it (Model::ichunk: one pass over the nodes, side A's positions and forces are
-// still in cache); else bulk chunks (c < nbc), then interface chunks. PerIface: the interfaces
-// take their own parameters (InterfaceData::params); else all take InterfaceData::coh. Fric: the
-// model has slip states (InterfaceData::islip): a point that has begun to soften reads and writes
-// its slip state too (the others never touch it).
-template <int D, bool PerIface, bool Fric>
-struct ForceKernel {
+// The bulk part of the force pass: element e's forces into the scatter accessor.
+template <int D>
+struct BulkForces {
   Kokkos::View<double* [D]> x;
-  Kokkos::View<double* [D]> v;  // v(n - 1/2): the step's motion of a softening point's node pair (Fric)
   ElementData<D> el;
-  InterfaceData<D> in;
-  ForceScatter<D> sf;
-  int nbc;
-  bool fused;
 
-  // Bulk element e.
   template <class Acc>
-  KOKKOS_INLINE_FUNCTION void bulk(const int e, Acc& acc) const {
+  KOKKOS_INLINE_FUNCTION void operator()(const int e, Acc& acc) const {
     double xe[D + 1][D], G[D][D], fe[D + 1][D];
     gather_element<D>(x, el, e, xe, G);
     const int mt = el.emat(e);
@@ -40,10 +29,20 @@ struct ForceKernel {
     for (int a = 0; a < D + 1; ++a)
       for (int i = 0; i < D; ++i) acc(el.elem(e, a), i) += fe[a][i];
   }
+};
 
-  // Interface q: its history and, while it carries, its forces.
+// The interface part: interface q's history and, while it carries, its forces. PerIface: the
+// interfaces take their own parameters (InterfaceData::params); else all take InterfaceData::coh.
+// Fric: the model has slip states (InterfaceData::islip): a point that has begun to soften reads
+// and writes its slip state too (the others never touch it).
+template <int D, bool PerIface, bool Fric>
+struct InterfaceForces {
+  Kokkos::View<double* [D]> x;
+  Kokkos::View<double* [D]> v;  // v(n - 1/2): the step's motion of a softening point's node pair (Fric)
+  InterfaceData<D> in;
+
   template <class Acc>
-  KOKKOS_INLINE_FUNCTION void interface(const int q, Acc& acc) const {
+  KOKKOS_INLINE_FUNCTION void operator()(const int q, Acc& acc) const {
     // Model::icontact: nonzero once the interface carries nothing (handed over to contact: its
     // faces are in contact instead; or, without contact, come apart for good: interface_apart).
     if (in.icontact(q)) return;
@@ -89,42 +88,170 @@ struct ForceKernel {
       }
     }
   }
+};
 
-  KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
-    auto acc = sf.access();
-    if (fused) {
-      const int e1 = kmin((c + 1) * kChunk, el.bulk_elems());
-      for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
-      for (int q = in.ichunk(c); q < in.ichunk(c + 1); ++q) interface(q, acc);
-    } else if (c < nbc) {
-      const int e1 = kmin((c + 1) * kChunk, el.bulk_elems());
-      for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
-    } else {
-      const int i0 = (c - nbc) * kChunk, i1 = kmin(i0 + kChunk, in.ni);
-      for (int q = i0; q < i1; ++q) interface(q, acc);
+// The interface part point by point, for the GPU (the split path of run_force_kernels): the
+// same forces and histories as InterfaceForces (to round-off: each node pair takes its point's
+// forces and the normal's share in two adds), with only one point's history, slip state and forces
+// live at a time, the forces scattered as soon as they are known, and the positions and the
+// parameters read again where they are needed rather than held: on CUDA the 3D kernel of one
+// interface material takes 127 registers without spills where the fused kernel took 208-220
+// (docs/cuda.md, "Kernel resources").
+template <int D, bool PerIface, bool Fric>
+struct LeanInterfaceForces {
+  Kokkos::View<double* [D]> x;
+  Kokkos::View<double* [D]> v;
+  InterfaceData<D> in;
+
+  // separation of point k: its B node's position less its A node's (read again where needed
+  // rather than held: the positions do not change in the force pass)
+  KOKKOS_INLINE_FUNCTION void separation(int q, int k, double (&d)[D]) const {
+    const int na = in.iface(q, k), nb = in.iface(q, D + k);
+    for (int i = 0; i < D; ++i) d[i] = x(nb, i) - x(na, i);
+  }
+
+  template <class Acc>
+  KOKKOS_INLINE_FUNCTION void operator()(const int q, Acc& acc) const {
+    if (in.icontact(q)) return;
+    double n[D];  // the unit normal: all the points need of the positions but their own
+    bool apart;
+    {
+      double xa[D][D], xb[D][D], dmg[D], ap_cur;
+      gather_interface<D>(x, in.iface, q, xa, xb);
+      interface_frame<D>(xa, xb, 1.0, n, ap_cur);
+      for (int k = 0; k < D; ++k) dmg[k] = cohesive_damage(load_point(in.ihist, q, k));
+      apart = interface_apart<D>(xa, xb, dmg);
+    }
+    if (apart) {
+      for (int k = 0; k < D; ++k) {
+        const CohesiveParams p = PerIface ? in.params(q) : in.coh;
+        const bool slips = Fric && p.tanphir >= 0.0;
+        CohesivePoint h = load_point(in.ihist, q, k);
+        SlipPoint<D> sl = slips && h.dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
+        double d[D];
+        separation(q, k, d);
+        interface_fail_point<D, Fric>(d, n, p, h, sl);
+        store_point(in.ihist, q, k, h);
+        if (slips) store_slip<D>(in.islip, q, k, sl);
+      }
+      if (in.contact_handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
+      else in.icontact(q) = 1;
+      return;
+    }
+    const double ap = in.iarea(q);
+    double g[D], dsum = 0;  // dU/dn
+    for (int i = 0; i < D; ++i) g[i] = 0;
+    for (int k = 0; k < D; ++k) {
+      // the parameters again for each point (PerIface: from the table; held through the points,
+      // they cost 20 registers)
+      const CohesiveParams p = PerIface ? in.params(q) : in.coh;
+      const bool slips = Fric && p.tanphir >= 0.0;
+      const int na = in.iface(q, k), nb = in.iface(q, D + k);
+      CohesivePoint h = load_point(in.ihist, q, k);
+      const CohesivePoint h0 = h;
+      const bool soft = slips && h.dm0 > 0.0;
+      SlipPoint<D> sl = soft ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
+      double d[D], du[D], fa[D], fb[D];
+      separation(q, k, d);
+      for (int i = 0; i < D; ++i) du[i] = soft ? (v(nb, i) - v(na, i)) * in.step_dt : 0.0;
+      dsum += interface_point_forces<D, Fric>(d, n, ap, p, h, sl, du, fa, fb, g);
+      if (!same_point(h, h0)) store_point(in.ihist, q, k, h);
+      if (slips && h.dm0 > 0.0) store_slip<D>(in.islip, q, k, sl);
+      for (int i = 0; i < D; ++i) {
+        acc(na, i) += fa[i];
+        acc(nb, i) += fb[i];
+      }
+    }
+    double dm[D][D];
+    {
+      double xa[D][D], xb[D][D], e[D - 1][D];  // read again: held through the points, they cost registers
+      gather_interface<D>(x, in.iface, q, xa, xb);
+      mid_edges<D>(xa, xb, e);
+      interface_normal_forces<D>(e, n, g, dm);
+    }
+    for (int k = 0; k < D; ++k)
+      for (int i = 0; i < D; ++i) {
+        acc(in.iface(q, k), i) += -0.5 * dm[k][i];
+        acc(in.iface(q, D + k), i) += -0.5 * dm[k][i];
+      }
+    if (in.contact_handover && dsum / D >= 1.0) {
+      double xa[D][D], xb[D][D];
+      gather_interface<D>(x, in.iface, q, xa, xb);
+      if (interface_parted<D>(xa, xb, in.handover_slip)) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
     }
   }
 };
 
-// Internal forces of bulk elements and interfaces, fused in one kernel and scattered into m.f
-// (which the node update left at zero). contribute = false: the sums stay in sf (the caller adds
-// the contact forces to it and contributes).
-// Work items: on host backends each chunk of kChunk elements with the interfaces whose side A
-// lies in it (Model::ichunk: one pass over the nodes), else bulk chunks, then interface chunks.
+// Host backends: work item c is element chunk c with the interfaces whose side A lies in it
+// (Model::ichunk: one pass over the nodes, side A's positions and forces are still in cache).
+template <int D, bool PerIface, bool Fric>
+struct FusedForceKernel {
+  BulkForces<D> bulk;
+  InterfaceForces<D, PerIface, Fric> iface;
+  ForceScatter<D> sf;
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
+    auto acc = sf.access();
+    const int e1 = kmin((c + 1) * kChunk, bulk.el.bulk_elems());
+    for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
+    for (int q = iface.in.ichunk(c); q < iface.in.ichunk(c + 1); ++q) iface(q, acc);
+  }
+};
+
+// Elsewhere (GPUs: one thread per item; a model without Model::ichunk) the bulk elements and the
+// interfaces are two kernels: each holds only the registers its own part needs (on CUDA, one
+// kernel with both took the interface part's registers for every bulk element too). Work item c:
+// chunk c of kChunk items, 0 <= item < n.
+template <class Part, int D>
+struct ChunkForceKernel {
+  Part part;
+  ForceScatter<D> sf;
+  int n;
+
+  KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
+    auto acc = sf.access();
+    const int i1 = kmin((c + 1) * kChunk, n);
+    for (int i = c * kChunk; i < i1; ++i) part(i, acc);
+  }
+};
+
+// Internal forces of bulk elements and interfaces scattered into m.f (which the node update left
+// at zero). contribute = false: the sums stay in sf (the caller adds the contact forces to it and
+// contributes). The two kernels of the split run under ForceLaunchBounds (kernels/fdem_kokkos.hpp).
+template <int D, bool PerIface, bool Fric>
+void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int nbc) {
+  const BulkForces<D> bulk{m.x, m.elements()};
+  if constexpr (kChunk > 1) {  // host backends (a device build compiles no fused kernel)
+    if (fused) {
+      const InterfaceForces<D, PerIface, Fric> iface{m.x, m.v, m.interfaces()};
+      Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc),
+                           FusedForceKernel<D, PerIface, Fric>{bulk, iface, sf});
+      return;
+    }
+  }
+  const int nb = m.elements().bulk_elems(), ni = m.ni;
+  if (nb > 0)
+    Kokkos::parallel_for("fdem::forces_bulk",
+                         Kokkos::RangePolicy<ExecSpace, ForceLaunchBounds>(0, (nb + kChunk - 1) / kChunk),
+                         ChunkForceKernel<BulkForces<D>, D>{bulk, sf, nb});
+  if (ni > 0)
+    Kokkos::parallel_for("fdem::forces_interfaces",
+                         Kokkos::RangePolicy<ExecSpace, ForceLaunchBounds>(0, (ni + kChunk - 1) / kChunk),
+                         ChunkForceKernel<LeanInterfaceForces<D, PerIface, Fric>, D>{
+                             LeanInterfaceForces<D, PerIface, Fric>{m.x, m.v, m.interfaces()}, sf, ni});
+}
+
 template <int D>
 void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = true) {
-  const int ne = m.ne, ni = m.ni;
-  const int nbc = (ne + kChunk - 1) / kChunk, nic = (ni + kChunk - 1) / kChunk;
+  const int nbc = (m.ne + kChunk - 1) / kChunk;
   const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
   sf.reset();
-  const Kokkos::RangePolicy<ExecSpace> policy(0, fused ? nbc : nbc + nic);
-  auto run = [&](auto kernel) { Kokkos::parallel_for("fdem::forces", policy, kernel); };
   if (m.per_interface()) {
-    if (m.has_slip()) run(ForceKernel<D, true, true>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
-    else run(ForceKernel<D, true, false>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
+    if (m.has_slip()) run_force_kernels<D, true, true>(m, sf, fused, nbc);
+    else run_force_kernels<D, true, false>(m, sf, fused, nbc);
   } else {
-    if (m.has_slip()) run(ForceKernel<D, false, true>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
-    else run(ForceKernel<D, false, false>{m.x, m.v, m.elements(), m.interfaces(), sf, nbc, fused});
+    if (m.has_slip()) run_force_kernels<D, false, true>(m, sf, fused, nbc);
+    else run_force_kernels<D, false, false>(m, sf, fused, nbc);
   }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;

@@ -46,11 +46,12 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
 // release whatever overlap its faces reached meanwhile), with contact until the next handover
 // check makes its faces contact surfaces. Faces that stay close (sliding or pressed together)
 // keep the penalty; with contact, interface_parted below hands them over.
+// dmg: the damage of each point (cohesive_damage).
 template <int D>
 KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
-                                            const CohesivePoint (&h)[D]) {
+                                            const double (&dmg)[D]) {
   bool failed = false;
-  for (int k = 0; k < D; ++k) failed = failed || cohesive_damage(h[k]) >= 1.0;
+  for (int k = 0; k < D; ++k) failed = failed || dmg[k] >= 1.0;
   if (!failed) return false;
   double r2;
   if constexpr (D == 2) {
@@ -72,12 +73,19 @@ KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const doub
     r2 = r * r;
   }
   for (int k = 0; k < D; ++k) {
-    if (cohesive_damage(h[k]) < 1.0) continue;
+    if (dmg[k] < 1.0) continue;
     double d2 = 0;
     for (int i = 0; i < D; ++i) d2 += (xb[k][i] - xa[k][i]) * (xb[k][i] - xa[k][i]);
     if (d2 > r2) return true;
   }
   return false;
+}
+template <int D>
+KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
+                                            const CohesivePoint (&h)[D]) {
+  double dmg[D];
+  for (int k = 0; k < D; ++k) dmg[k] = cohesive_damage(h[k]);
+  return interface_apart<D>(xa, xb, dmg);
 }
 
 // Fails every point of an interface that has come apart (interface_apart): a point that still
@@ -85,6 +93,27 @@ KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const doub
 // dissipation (its remaining fracture energy is never spent: the crack has run past it).
 // Fric: a softening point's residual friction spring (interface_forces) releases its energy too,
 // booked as friction (sl.wf).
+// One point of a come-apart interface with unit normal n (interface_frame); d: its separation
+// (its B node's position less its A node's).
+template <int D, bool Fric = false>
+KOKKOS_INLINE_FUNCTION void interface_fail_point(const double (&d)[D], const double (&n)[D], const CohesiveParams& p,
+                                                 CohesivePoint& h, SlipPoint<D>& sl) {
+  const double dmg = cohesive_damage(h);
+  if (dmg >= 1.0) return;
+  double dn = 0, ds2 = 0;
+  for (int i = 0; i < D; ++i) dn += d[i] * n[i];
+  for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
+  h.wd += cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);  // per unit area, as wd
+  if constexpr (Fric) {
+    if (p.tanphir >= 0.0 && dmg > 0.0) {
+      double e[D];
+      sl.wf += 0.5 * p.ks * elastic_slip<D>(n, d, sl, e);
+    }
+  }
+  if (!(h.dm0 > 0.0)) h.dm0 = 1e-300;  // never initiated: initiated now
+  if (!(h.dmf > h.dm0)) h.dmf = 2.0 * h.dm0;
+  h.dmax = h.dmax > h.dmf ? h.dmax : h.dmf;
+}
 template <int D, bool Fric = false>
 KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const double (&xb)[D][D],
                                                const CohesiveParams& p, CohesivePoint (&h)[D],
@@ -92,24 +121,9 @@ KOKKOS_INLINE_FUNCTION void interface_fail_all(const double (&xa)[D][D], const d
   double n[D], ap_cur;
   interface_frame<D>(xa, xb, 1.0, n, ap_cur);
   for (int k = 0; k < D; ++k) {
-    const double dmg = cohesive_damage(h[k]);
-    if (dmg >= 1.0) continue;
-    double d[D], dn = 0, ds2 = 0;
-    for (int i = 0; i < D; ++i) {
-      d[i] = xb[k][i] - xa[k][i];
-      dn += d[i] * n[i];
-    }
-    for (int i = 0; i < D; ++i) ds2 += (d[i] - dn * n[i]) * (d[i] - dn * n[i]);
-    h[k].wd += cohesive_stored(p, dn, kmath::sqrt(ds2), dmg);  // per unit area, as wd
-    if constexpr (Fric) {
-      if (p.tanphir >= 0.0 && dmg > 0.0) {
-        double e[D];
-        sl[k].wf += 0.5 * p.ks * elastic_slip<D>(n, d, sl[k], e);
-      }
-    }
-    if (!(h[k].dm0 > 0.0)) h[k].dm0 = 1e-300;  // never initiated: initiated now
-    if (!(h[k].dmf > h[k].dm0)) h[k].dmf = 2.0 * h[k].dm0;
-    h[k].dmax = h[k].dmax > h[k].dmf ? h[k].dmax : h[k].dmf;
+    double d[D];
+    for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
+    interface_fail_point<D, Fric>(d, n, p, h[k], sl[k]);
   }
 }
 
@@ -164,6 +178,81 @@ KOKKOS_INLINE_FUNCTION void residual_friction(const CohesiveParams& p, const dou
   }
 }
 
+// One point's share of interface_forces: updates its history and returns its damage; d: its
+// separation (B node less A node); fa, fb: the forces on its node pair without the normal's change
+// (interface_normal_forces); g += dU/dn.
+template <int D, bool Fric = false>
+KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
+                                                     const CohesiveParams& p, CohesivePoint& h, SlipPoint<D>& sl,
+                                                     const double (&du)[D], double (&fa)[D], double (&fb)[D],
+                                                     double (&g)[D]) {
+  double ds[D], dn = 0;
+  for (int i = 0; i < D; ++i) dn += d[i] * n[i];
+  double ds2 = 0;
+  for (int i = 0; i < D; ++i) {
+    ds[i] = d[i] - dn * n[i];
+    ds2 += ds[i] * ds[i];
+  }
+  double tn, kss, dmg;
+  const double dmg0 = Fric ? cohesive_damage(h) : 0.0;
+  const bool fresh = !(h.dm0 > 0.0);
+  cohesive_update(p, dn, kmath::sqrt(ds2), h, tn, kss, dmg);
+  for (int i = 0; i < D; ++i) {
+    fa[i] = ap * (tn * n[i] + kss * ds[i]);
+    fb[i] = -fa[i];
+    g[i] += ap * (tn - kss * dn) * d[i];
+  }
+  if constexpr (Fric) {
+    if (p.tanphir >= 0.0 && dmg > 0.0)
+      residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, du, fresh, h, sl, fa, fb, g);
+  }
+  return dmg;
+}
+
+// The mid-surface's edges from its first point, m_k - m_0 with m_k = (xa_k + xb_k) / 2 (k >= 1):
+// what the normal's change needs of the positions (interface_normal_forces).
+template <int D>
+KOKKOS_INLINE_FUNCTION void mid_edges(const double (&xa)[D][D], const double (&xb)[D][D], double (&e)[D - 1][D]) {
+  for (int k = 1; k < D; ++k)
+    for (int i = 0; i < D; ++i) e[k - 1][i] = 0.5 * (xa[k][i] + xb[k][i] - xa[0][i] - xb[0][i]);
+}
+
+// The forces of the normal's change: dm[k] = dU/dm_k through the mid-surface points
+// m_k = (xa_k + xb_k) / 2 from g = dU/dn; each node of pair k takes -dm[k] / 2. e: mid_edges.
+template <int D>
+KOKKOS_INLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1][D], const double (&n)[D],
+                                                    const double (&g)[D], double (&dm)[D][D]) {
+  double gp[D], gn = 0;  // projection (I - n n^T) g
+  for (int i = 0; i < D; ++i) gn += g[i] * n[i];
+  for (int i = 0; i < D; ++i) gp[i] = g[i] - gn * n[i];
+  if constexpr (D == 2) {
+    // n = (t_y, -t_x) / L with t = m1 - m0: dU/dt = (1/L) R^T gp, R^T (gx, gy) = (-gy, gx)
+    const double tx = e[0][0];
+    const double ty = e[0][1];
+    const double L = kmath::sqrt(tx * tx + ty * ty);
+    const double Gt[2] = {-gp[1] / L, gp[0] / L};
+    for (int i = 0; i < 2; ++i) {
+      dm[1][i] = Gt[i];
+      dm[0][i] = -Gt[i];
+    }
+  } else {
+    // n = c / |c|, c = a x b, a = m1 - m0, b = m2 - m0: dU/dc = gp / |c|,
+    // dU/da = b x hc, dU/db = hc x a
+    const double(&a)[3] = e[0];
+    const double(&b)[3] = e[1];
+    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const double cl = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const double hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
+    const double da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
+    const double db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
+    for (int i = 0; i < 3; ++i) {
+      dm[1][i] = da[i];
+      dm[2][i] = db[i];
+      dm[0][i] = -da[i] - db[i];
+    }
+  }
+}
+
 // Cohesive forces of one interface: updates the history of its points and returns the forces on
 // its A-side (fa) and B-side (fb) nodes, and the mean damage. ap: reference tributary area of a
 // point. The forces are the exact gradient of the stored energy U = ap sum_k psi(delta_k . n,
@@ -177,7 +266,8 @@ KOKKOS_INLINE_FUNCTION void residual_friction(const CohesiveParams& p, const dou
 // Mohr-Coulomb peak down the paper's softening branch until it meets sigma_n tan(phi_r) and stays
 // there; psi gains k_s |e|^2 / 2 and the slip dissipates into sl.wf. The damage and its fracture
 // energy are the paper's law's. sl: the points' slip states (zero for a point that had not begun
-// to soften).
+// to soften). (The GPU's force kernel does the same point by point: LeanInterfaceForces,
+// kernels/forces.hpp.)
 template <int D, bool Fric = false>
 KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
                                                double ap, const CohesiveParams& p,
@@ -190,66 +280,13 @@ KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const d
   double g[D];  // dU/dn
   for (int i = 0; i < D; ++i) g[i] = 0;
   for (int k = 0; k < D; ++k) {
-    double d[D], ds[D], dn = 0;
-    for (int i = 0; i < D; ++i) {
-      d[i] = xb[k][i] - xa[k][i];
-      dn += d[i] * n[i];
-    }
-    double ds2 = 0;
-    for (int i = 0; i < D; ++i) {
-      ds[i] = d[i] - dn * n[i];
-      ds2 += ds[i] * ds[i];
-    }
-    double tn, kss, dmg;
-    const double dmg0 = Fric ? cohesive_damage(h[k]) : 0.0;
-    const bool fresh = !(h[k].dm0 > 0.0);
-    cohesive_update(p, dn, kmath::sqrt(ds2), h[k], tn, kss, dmg);
-    dsum += dmg;
-    for (int i = 0; i < D; ++i) {
-      fa[k][i] = ap * (tn * n[i] + kss * ds[i]);
-      fb[k][i] = -fa[k][i];
-      g[i] += ap * (tn - kss * dn) * d[i];
-    }
-    if constexpr (Fric) {
-      if (p.tanphir >= 0.0 && dmg > 0.0)
-        residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, du[k], fresh, h[k], sl[k],
-                             fa[k], fb[k], g);
-    }
+    double d[D];
+    for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
+    dsum += interface_point_forces<D, Fric>(d, n, ap, p, h[k], sl[k], du[k], fa[k], fb[k], g);
   }
-  // dU/dn -> forces through the mid-surface points m_k = (xa_k + xb_k) / 2.
-  double gp[D], gn = 0;  // projection (I - n n^T) g
-  for (int i = 0; i < D; ++i) gn += g[i] * n[i];
-  for (int i = 0; i < D; ++i) gp[i] = g[i] - gn * n[i];
-  double dm[D][D];  // dU/dm_k
-  if constexpr (D == 2) {
-    // n = (t_y, -t_x) / L with t = m1 - m0: dU/dt = (1/L) R^T gp, R^T (gx, gy) = (-gy, gx)
-    const double tx = 0.5 * (xa[1][0] + xb[1][0] - xa[0][0] - xb[0][0]);
-    const double ty = 0.5 * (xa[1][1] + xb[1][1] - xa[0][1] - xb[0][1]);
-    const double L = kmath::sqrt(tx * tx + ty * ty);
-    const double Gt[2] = {-gp[1] / L, gp[0] / L};
-    for (int i = 0; i < 2; ++i) {
-      dm[1][i] = Gt[i];
-      dm[0][i] = -Gt[i];
-    }
-  } else {
-    // n = c / |c|, c = a x b, a = m1 - m0, b = m2 - m0: dU/dc = gp / |c|,
-    // dU/da = b x hc, dU/db = hc x a
-    double a[3], b[3];
-    for (int i = 0; i < 3; ++i) {
-      a[i] = 0.5 * (xa[1][i] + xb[1][i] - xa[0][i] - xb[0][i]);
-      b[i] = 0.5 * (xa[2][i] + xb[2][i] - xa[0][i] - xb[0][i]);
-    }
-    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    const double cl = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    const double hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
-    const double da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
-    const double db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
-    for (int i = 0; i < 3; ++i) {
-      dm[1][i] = da[i];
-      dm[2][i] = db[i];
-      dm[0][i] = -da[i] - db[i];
-    }
-  }
+  double e[D - 1][D], dm[D][D];  // mid-surface edges, dU/dm_k
+  mid_edges<D>(xa, xb, e);
+  interface_normal_forces<D>(e, n, g, dm);
   for (int k = 0; k < D; ++k)
     for (int i = 0; i < D; ++i) {
       fa[k][i] -= 0.5 * dm[k][i];

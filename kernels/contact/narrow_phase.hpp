@@ -245,7 +245,10 @@ KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S,
 #define FDEM_NARROW_GAPS_FIRST 0
 #endif
 
-template <int D, bool Fric, int Cap = kSubsetCap>
+// Seed: 0, the pass reads `seeding` (host backends); 1, no node has a seed; 2, seeds are read. GPUs
+// take 1 or 2 by `seeding` at the launch: the seeds' values (a rare pass: the polls with handovers)
+// then cost the common pass no registers (docs/cuda.md, "Kernel resources").
+template <int D, bool Fric, int Cap = kSubsetCap, int Seed = 0>
 struct ContactForcesFn {
   using Subset = PairSubset<Cap>;
   Kokkos::View<double* [D]> x, v, xbuild;
@@ -260,24 +263,26 @@ struct ContactForcesFn {
   // the interfaces; seeding: some were handed over at this poll (their nodes' HandoverSeed)
   InterfaceData<D> in;
   bool seeding;
+  KOKKOS_INLINE_FUNCTION bool seeds() const { return Seed == 0 ? seeding : Seed == 2; }
 
   KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const {
     auto f = scatter.access();
     const int s = pts(i);
-    double xs[D], vs[D], d2 = 0, v2 = 0;
+    double xs[D], d2 = 0, v2 = 0;
     for (int k = 0; k < D; ++k) {
       xs[k] = x(s, k);
-      vs[k] = v(s, k);
       d2 += (xs[k] - xbuild(s, k)) * (xs[k] - xbuild(s, k));
-      v2 += vs[k] * vs[k];
+      v2 += v(s, k) * v(s, k);
     }
     sums.d2max = d2 > sums.d2max ? d2 : sums.d2max;
     sums.v2max = v2 > sums.v2max ? v2 : sums.v2max;
     if (i >= nforce) return;
-    const HandoverSeed<D> seed = seeding ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{};
     const int b = P.off(s), e = P.off(s + 1);
     if (b == e) {
-      sums.dissipated += seed.un + seed.us;  // no contact to take it
+      if (seeds()) {
+        const HandoverSeed<D> seed = handover_seed<D>(S, in, x, s);
+        sums.dissipated += seed.un + seed.us;  // no contact to take it
+      }
       return;
     }
     const double Anode = S.narea(s);
@@ -291,7 +296,16 @@ struct ContactForcesFn {
     }
     share(sub);
     release(sub, Anode);
-    contacts(f, s, sub, xs, vs, Anode, seed, sums);
+    // the seed only now (it is not used before): on GPUs the registers of the passes above stay
+    // free of it (docs/cuda.md, "Kernel resources")
+    const HandoverSeed<D> seed = seeds() ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{};
+    // the node's position and velocity read again (not held through the passes above: registers)
+    double xn[D], vs[D];
+    for (int k = 0; k < D; ++k) {
+      xn[k] = x(s, k);
+      vs[k] = v(s, k);
+    }
+    contacts(f, s, sub, xn, vs, Anode, seed, sums);
   }
 
   // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's), with the
@@ -595,28 +609,41 @@ void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np,
                     const PairScratch<D>& scratch, const ContactSurface<D>& surf, const ContactLaw& law,
                     double dt, const Kokkos::View<double* [D]>& xb, const ForceScatter<D>& sf,
                     const Kokkos::View<ContactSums>& pass, bool seeding) {
-  const ContactForcesFn<D, Fric, Cap> fn{m.x,  m.v, xb, sf,           points, P,      scratch,
-                                         surf, law, dt, nforce, m.interfaces(), seeding};
-  const int nt = ExecSpace().concurrency();
-  if (std::is_same<MemSpace, Kokkos::HostSpace>::value && nt > 1 && np > 0 &&
-      static_cast<int>(scratch.work.extent(0)) > np) {
-    auto work = scratch.work;
-    auto off = P.off;
-    auto pts = points;
-    Kokkos::parallel_scan(
-        "fdem::contact::forces_split [device]", Kokkos::RangePolicy<ExecSpace>(0, np),
-        KOKKOS_LAMBDA(const int i, int& upd, const bool final) {
-          const int s = pts(i);
-          const int w = i < nforce ? kPointWork + off(s + 1) - off(s) : 1;
-          if (final) work(i) = upd;
-          upd += w;
-          if (final && i == np - 1) work(np) = upd;
-        });
-    const BalancedPoints<ContactForcesFn<D, Fric, Cap>> bp{fn, work, np, nt};
-    Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace>(0, nt), bp, pass);
-    return;
+  // (host backends only: `if constexpr`, so that a device build compiles no kernel for it)
+  if constexpr (std::is_same<MemSpace, Kokkos::HostSpace>::value) {
+    const ContactForcesFn<D, Fric, Cap> fn{m.x,  m.v, xb, sf,           points, P,      scratch,
+                                           surf, law, dt, nforce, m.interfaces(), seeding};
+    const int nt = ExecSpace().concurrency();
+    if (nt > 1 && np > 0 && static_cast<int>(scratch.work.extent(0)) > np) {
+      auto work = scratch.work;
+      auto off = P.off;
+      auto pts = points;
+      Kokkos::parallel_scan(
+          "fdem::contact::forces_split [device]", Kokkos::RangePolicy<ExecSpace>(0, np),
+          KOKKOS_LAMBDA(const int i, int& upd, const bool final) {
+            const int s = pts(i);
+            const int w = i < nforce ? kPointWork + off(s + 1) - off(s) : 1;
+            if (final) work(i) = upd;
+            upd += w;
+            if (final && i == np - 1) work(np) = upd;
+          });
+      const BalancedPoints<ContactForcesFn<D, Fric, Cap>> bp{fn, work, np, nt};
+      Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace>(0, nt), bp, pass);
+      return;
+    }
   }
-  Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace>(0, np), fn, pass);
+  // (GPUs: under HeavyLaunchBounds, kernels/fdem_kokkos.hpp; the pass with seeds apart)
+  const Kokkos::RangePolicy<ExecSpace, HeavyLaunchBounds> policy(0, np);
+  if (seeding)
+    Kokkos::parallel_reduce("fdem::contact::forces [device]", policy,
+                            ContactForcesFn<D, Fric, Cap, 2>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt,
+                                                             nforce, m.interfaces(), seeding},
+                            pass);
+  else
+    Kokkos::parallel_reduce("fdem::contact::forces [device]", policy,
+                            ContactForcesFn<D, Fric, Cap, 1>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt,
+                                                             nforce, m.interfaces(), seeding},
+                            pass);
 }
 
 // Elastic energy of the contact springs (normal and shear) at the last narrow-phase pass.

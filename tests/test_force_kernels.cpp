@@ -1,0 +1,106 @@
+// The force pass's two shapes (kernels/forces.hpp): on host backends one fused kernel over element
+// chunks with their interfaces, on GPUs (and wherever Model::ichunk is absent) a bulk kernel and an
+// interface kernel. Both must give the same nodal forces (to round-off: the scatter adds in
+// another order) and exactly the same interface histories, with and without residual friction.
+// Host backends run both shapes, so the GPU's shape is checked here without a GPU.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "scenes.hpp"
+#include "solver/simulation.hpp"
+#include "solver_fixtures.hpp"
+
+namespace {
+
+using namespace fdem;
+
+// A cracked block whose interfaces initiate and soften under the displacement field below.
+template <int D>
+Case weak_case(bool friction) {
+  auto c = fdem_test::basic_case(D);
+  auto im = fdem_test::strong_interface(33e9 / (0.1 * 0.01), 13e9 / (0.1 * 0.01));
+  im.ft = 2e6;
+  im.c = 4e6;
+  im.phi = 0.6;
+  im.Gnc = 5;
+  im.Gsc = 50;
+  im.residual_friction = friction;
+  im.phi_r = 0.5;
+  c.interface_materials = {im};
+  c.fracture_material = 0;
+  c.contact.enabled = 0;
+  return c;
+}
+
+// x = X + u with u a smooth stretch plus a pseudo-random part of amplitude amp, on the device
+template <int D>
+void displace(Simulation<D>& sim, double amp) {
+  auto X = Kokkos::create_mirror_view(sim.m.X);
+  auto x = Kokkos::create_mirror_view(sim.m.x);
+  Kokkos::deep_copy(X, sim.m.X);
+  unsigned seed = 777;
+  for (int i = 0; i < sim.m.nn; ++i)
+    for (int k = 0; k < D; ++k) x(i, k) = X(i, k) * (1 + 2e-4 * (k + 1)) + amp * fdem_test::prand(seed);
+  Kokkos::deep_copy(sim.m.x, x);
+}
+
+struct Pass {
+  std::vector<double> f, hist;
+  double fmax = 0;
+  int softening = 0;
+};
+
+template <int D>
+Pass force_pass(bool split, bool friction, int calls) {
+  Simulation<D> sim(weak_case<D>(friction), fdem_test::cracked_block<D>(D == 2 ? 8 : 4));
+  EXPECT_GT(sim.m.ni, 0);
+  EXPECT_EQ(sim.m.has_slip(), friction);
+  Model<D> m = sim.m;  // a shallow copy (the same Views)
+  if (split) m.ichunk = Kokkos::View<int*>();
+  else EXPECT_EQ(static_cast<int>(m.ichunk.extent(0)), (m.ne + kChunk - 1) / kChunk + 1) << "not the fused shape";
+  Pass p;
+  for (int c = 0; c < calls; ++c) {  // the history evolves from call to call
+    displace(sim, 4e-6 * (c + 1));
+    Kokkos::deep_copy(sim.m.f, 0.0);
+    ForceScatter<D> sf(sim.m.f);
+    compute_forces<D>(m, sf);
+  }
+  auto f = Kokkos::create_mirror_view(sim.m.f);
+  Kokkos::deep_copy(f, sim.m.f);
+  auto h = Kokkos::create_mirror_view(sim.m.ihist);
+  Kokkos::deep_copy(h, sim.m.ihist);
+  for (int i = 0; i < sim.m.nn; ++i)
+    for (int k = 0; k < D; ++k) {
+      p.f.push_back(f(i, k));
+      p.fmax = std::max(p.fmax, std::fabs(f(i, k)));
+    }
+  for (int q = 0; q < sim.m.ni; ++q)
+    for (int k = 0; k < D; ++k) {
+      for (int j = 0; j < kPointHistory; ++j) p.hist.push_back(h(q, k, j));
+      p.softening += h(q, k, 1) > 0;  // dm0 > 0: initiated
+    }
+  return p;
+}
+
+template <int D>
+void same_forces(bool friction) {
+  const Pass fused = force_pass<D>(false, friction, 3), split = force_pass<D>(true, friction, 3);
+  ASSERT_EQ(fused.f.size(), split.f.size());
+  ASSERT_GT(fused.fmax, 0.0);
+  EXPECT_GT(fused.softening, 10) << "the scene should soften interfaces";
+  double worst = 0;
+  for (size_t i = 0; i < fused.f.size(); ++i) worst = std::max(worst, std::fabs(fused.f[i] - split.f[i]));
+  EXPECT_LE(worst, 1e-12 * fused.fmax) << "largest force " << fused.fmax;
+  ASSERT_EQ(fused.hist.size(), split.hist.size());
+  int differ = 0;
+  for (size_t i = 0; i < fused.hist.size(); ++i) differ += fused.hist[i] != split.hist[i];
+  EXPECT_EQ(differ, 0);
+}
+
+TEST(ForceKernels, SplitEqualsFused2D) { same_forces<2>(false); }
+TEST(ForceKernels, SplitEqualsFused3D) { same_forces<3>(false); }
+TEST(ForceKernels, SplitEqualsFusedWithFriction3D) { same_forces<3>(true); }
+
+}  // namespace
