@@ -1046,6 +1046,41 @@ class Report:
                "yet.")
         self.w()
 
+    def devmem_section(self):
+        """Issue 50 item 4: the device memory model (perf/run_all step `devmem`: device_memory.json)."""
+        self.w("## 9d. Device memory")
+        self.w()
+        d = load(os.path.join(self.res, "device_memory.json"))
+        if not d or not d.get("runs"):
+            self.w("(missing: device_memory.json, from `perf/run_all --only devmem`)")
+            self.w()
+            return
+        self.w("The bytes of the Kokkos Views a run holds, by kind, at their peak: what a GPU run allocates "
+               "on the device (the same Views; Kokkos' allocation hooks count them on the host backend, "
+               "`summary.json` `memory.views`), less the host's per-thread scatter copies (a GPU adds with "
+               "atomics). The 3D impact (`cases/particle_impact_3d`) at each element size for "
+               f"{d['steps']} steps, and one whole run: `perf/device_memory.py` "
+               "(`OMP_NUM_THREADS=2`).")
+        self.w()
+        kinds = sorted({k for r in d["runs"] for k in r["by_kind"]})
+        rows = []
+        for r in d["runs"] + ([d["full_run"]] if d.get("full_run") else []):
+            label = f"{r['h'] * 1e3:g} mm" + (f", whole run ({r['steps']} steps)" if r is d.get("full_run") else "")
+            rows.append([label, f"{r['elements']:,}"] + [fmt(r["by_kind"].get(k, 0) / r["elements"], 4) for k in kinds]
+                        + [fmt(r["device_bytes"] / r["elements"], 4), fmt(r["rss_bytes"] / r["elements"], 4)])
+        self.w(table(["element size", "tetrahedra"] + [f"{k} B/tet" for k in kinds] +
+                     ["device B/tet", "host peak RSS B/tet"], rows))
+        self.w()
+        fits = d["largest_tetrahedra_in_90_percent"]
+        self.w(f"Model: {d['fit_bytes_per_tet']:.0f} B per tetrahedron over the sizes (least squares, offset "
+               f"{d['fit_offset_bytes'] / 1e6:.1f} MB), times {d['growth_over_run']:.3f} for the contact lists' "
+               f"growth over the whole run: **{d['model_bytes_per_tet']:.0f} B per tetrahedron on the device**. "
+               "The largest impact within 90 % of a card's memory: " +
+               ", ".join(f"{k}: **{v / 1e6:.0f} million** tetrahedra" for k, v in fits.items()) +
+               ". The host's share during a GPU run (mesh, set-up, output buffers) is the peak RSS less the "
+               "Views.")
+        self.w()
+
     def mpi_section(self):
         """Issue 20: runs over several processes (perf/mpi_scaling.py writes mpi_scaling.json)."""
         self.w("## 10. Runs over several processes (MPI)")
@@ -1210,6 +1245,7 @@ class Report:
         self.setup_section()
         self.impact_section()
         self.gpuready_section()
+        self.devmem_section()
         self.mpi_section()
         body = self.lines[body_start:]
         self.lines = self.lines[:body_start]

@@ -72,6 +72,19 @@ TEST(Setup, RunReportsPhasesAndPeakMemory) {
   EXPECT_GT(st.at("gmsh_peak_rss_bytes").get<double>(), 1e6);  // the Gmsh child's own peak
   EXPECT_NEAR(s.at("memory").at("peak_rss_bytes_per_element").get<double>(),
               peak / s.at("counts").at("elements").get<double>(), 1e-6 * peak);
+  // the Views' memory (common/view_memory.hpp): within the resident peak (Kokkos fills every View
+  // it allocates), the model's kind at least the nodes' positions, velocities and forces (X, x,
+  // v, f: 4 x 3 doubles per node), contact arrays for the sphere's surface
+  const auto& vm = s.at("memory").at("views");
+  const double vpeak = vm.at("peak_bytes").get<double>();
+  EXPECT_GT(vpeak, 0.0);
+  EXPECT_LE(vpeak, peak);
+  EXPECT_GE(vm.at("peak_by_kind").at("model").get<double>(), 4 * 3 * 8 * s.at("counts").at("nodes").get<double>());
+  EXPECT_GT(vm.at("peak_by_kind").at("contact").get<double>(), 0.0);
+  double kinds = 0;
+  for (const auto& [k, b] : vm.at("peak_by_kind").items()) kinds += b.get<double>();
+  EXPECT_EQ(kinds, vpeak);  // the kinds partition the peak
+  EXPECT_LE(vm.at("device_bytes_per_element").get<double>(), vm.at("peak_bytes_per_element").get<double>());
   fs::remove_all(out);
   fs::remove(out + ".log");
 }

@@ -21,6 +21,7 @@
 
 #include "common/error.hpp"
 #include "common/kernel_times.hpp"
+#include "common/view_memory.hpp"
 #include "fdem_version.hpp"
 #include "parallel/comm.hpp"
 #include "parallel/partition.hpp"
@@ -294,6 +295,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
       opt.interrupt = &g_interrupt;
       if (g_comm && g_comm->size() > 1) opt.comm = g_comm;
       if (o.kernel_times) fdem::kernel_times::enable();
+      fdem::view_memory::enable();  // summary.json memory.views (one hook per allocation)
       const auto summary = fdem::run_case(o.case_path, opt);
       if (o.kernel_times) fdem::kernel_times::print();
       if (summary.value("stop_reason", "") == "interrupted") return 128 + summary.value("signal", 0);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "common/kernel_times.hpp"
+#include "common/view_memory.hpp"
 #include "common/setup_times.hpp"
 #include "kernels/parts.hpp"
 
@@ -201,6 +202,15 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   summary["memory"] = {{"peak_rss_bytes", peak},
                        {"peak_rss_bytes_per_element", peak / std::max(1, sim.m.ne)},
                        {"gmsh_peak_rss_bytes", setup_times::gmsh_peak_bytes()}};
+  if (view_memory::enabled()) {
+    // the Views' peak (what a GPU would hold, less the host's scatter copies): docs/performance.md
+    nlohmann::json vm = view_memory::report();
+    const double elems = std::max(1, sim.m.ne);
+    const double scatter = vm["peak_by_kind"].value("scatter", 0.0);
+    vm["peak_bytes_per_element"] = vm["peak_bytes"].get<double>() / elems;
+    vm["device_bytes_per_element"] = (vm["peak_bytes"].get<double>() - scatter) / elems;
+    summary["memory"]["views"] = vm;
+  }
   if (kernel_times::enabled()) summary["kernel_times"] = kernel_times::report();
   summary["energy"] = energy_report(last, history.max_relative_balance_error());
   summary["energy"]["warning_threshold"] = HistoryTable<D>::kBalanceWarning;
