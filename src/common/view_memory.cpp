@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <mutex>
 #include <unordered_map>
 #include <vector>
 
@@ -17,7 +18,9 @@ struct Alloc {
   uint64_t bytes = 0;
 };
 
-// The hooks are called from the host thread that allocates (Views are made on the host).
+// Views are made on the host thread of the run, but Kokkos' host backends allocate their own
+// per-thread buffers from inside parallel regions: the hooks take a lock.
+std::mutex g_lock;
 bool g_enabled = false;
 std::unordered_map<const void*, Alloc> g_live;
 std::map<std::string, uint64_t> g_by_label;  // live bytes per label
@@ -26,6 +29,7 @@ std::map<std::string, uint64_t> g_peak_by_label;  // g_by_label when g_current l
 
 void on_allocate(const Kokkos_Profiling_SpaceHandle, const char* label, const void* ptr, const uint64_t size) {
   const std::string l = label ? label : "";
+  const std::lock_guard<std::mutex> hold(g_lock);
   g_live[ptr] = Alloc{l, size};
   g_by_label[l] += size;
   g_current += size;
@@ -36,6 +40,7 @@ void on_allocate(const Kokkos_Profiling_SpaceHandle, const char* label, const vo
 }
 
 void on_deallocate(const Kokkos_Profiling_SpaceHandle, const char*, const void* ptr, const uint64_t) {
+  const std::lock_guard<std::mutex> hold(g_lock);
   auto it = g_live.find(ptr);
   if (it == g_live.end()) return;  // allocated before the hooks
   auto lb = g_by_label.find(it->second.label);
@@ -73,6 +78,7 @@ std::string kind_of(const std::string& label) {
 }
 
 nlohmann::json report(int largest) {
+  const std::lock_guard<std::mutex> hold(g_lock);
   std::map<std::string, uint64_t> kinds;
   for (const auto& [l, b] : g_peak_by_label) kinds[kind_of(l)] += b;
   std::vector<std::pair<std::string, uint64_t>> v(g_peak_by_label.begin(), g_peak_by_label.end());
