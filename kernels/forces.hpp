@@ -215,9 +215,19 @@ struct ChunkForceKernel {
   }
 };
 
+// The bulk kernel's launch bounds: none in the default (25 %) build, where the interface kernel's
+// bound would let the compiler spend 94 registers (3D) on what takes 79 without it; the 50 %
+// variant's bound (64) in that build (docs/cuda.md, "Kernel resources").
+#if FDEM_CUDA_OCCUPANCY >= 50
+using BulkLaunchBounds = ForceLaunchBounds;
+#else
+using BulkLaunchBounds = Kokkos::LaunchBounds<>;
+#endif
+
 // Internal forces of bulk elements and interfaces scattered into m.f (which the node update left
 // at zero). contribute = false: the sums stay in sf (the caller adds the contact forces to it and
-// contributes). The two kernels of the split run under ForceLaunchBounds (kernels/fdem_kokkos.hpp).
+// contributes). The interface kernel of the split runs under ForceLaunchBounds
+// (kernels/fdem_kokkos.hpp), the bulk kernel under BulkLaunchBounds.
 template <int D, bool PerIface, bool Fric>
 void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int nbc) {
   const BulkForces<D> bulk{m.x, m.elements()};
@@ -232,7 +242,7 @@ void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int n
   const int nb = m.elements().bulk_elems(), ni = m.ni;
   if (nb > 0)
     Kokkos::parallel_for("fdem::forces_bulk",
-                         Kokkos::RangePolicy<ExecSpace, ForceLaunchBounds>(0, (nb + kChunk - 1) / kChunk),
+                         Kokkos::RangePolicy<ExecSpace, BulkLaunchBounds>(0, (nb + kChunk - 1) / kChunk),
                          ChunkForceKernel<BulkForces<D>, D>{bulk, sf, nb});
   if (ni > 0)
     Kokkos::parallel_for("fdem::forces_interfaces",
