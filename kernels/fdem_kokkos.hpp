@@ -99,6 +99,14 @@ using ForceScatter = Kokkos::Experimental::ScatterView<double* [D]>;
 using HeavyLaunchBounds = Kokkos::LaunchBounds<128, (FDEM_CUDA_OCCUPANCY >= 50 ? 8 : 4)>;
 using ForceLaunchBounds = HeavyLaunchBounds;
 
+// A device function kept out of line: a rare branch of a heavy kernel, so that on CUDA the
+// registers it needs do not add to those of the common path (docs/cuda.md, "Kernel resources").
+#if defined(__CUDACC__) || defined(__HIPCC__)
+#define FDEM_NOINLINE __noinline__
+#else
+#define FDEM_NOINLINE __attribute__((noinline))
+#endif
+
 }  // namespace fdem
 
 namespace Kokkos {

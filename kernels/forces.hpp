@@ -14,6 +14,18 @@ namespace fdem {
 constexpr int kChunk =
     Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible ? kScatterChunk : 1;
 
+// Arguments and results by value of the interface kernel's out-of-line branches
+// (LeanInterfaceForces::fail and friction_step).
+template <int D>
+struct FrictionVec {
+  double v[D];
+};
+template <int D>
+struct FrictionStep {
+  double f[D], dg[D];  // the increments of fa (and -fb) and of dU/dn
+  double wd;           // the fracture dissipation after the step
+};
+
 // The bulk part of the force pass: element e's forces into the scatter accessor.
 template <int D>
 struct BulkForces {
@@ -110,6 +122,76 @@ struct LeanInterfaceForces {
     for (int i = 0; i < D; ++i) d[i] = x(nb, i) - x(na, i);
   }
 
+  // The residual friction of point k of interface q (interface_point_forces' Friction policy),
+  // out of line with its arguments and results by value (a softening point's branch: on CUDA its
+  // registers do not add to the common path's, and no array of the caller needs an address, which
+  // would put it in local memory; docs/cuda.md, "Kernel resources"). It reads what the fused
+  // kernel holds in arrays: the slip state (zero for a point fresh in this step), the separation
+  // and the step's motion of the node pair, and stores the slip state; it returns the increments
+  // of the forces and of dU/dn (the same arithmetic: the caller adds f to fa, takes it from fb
+  // and adds dg to g) and the fracture dissipation.
+  KOKKOS_FUNCTION FDEM_NOINLINE FrictionStep<D> friction_step(const int q, const int k, const FrictionVec<D> n,
+                                                              const double dn, const double ap, const double tc,
+                                                              const double dD, const bool fresh,
+                                                              const double wd) const {
+    const CohesiveParams p = PerIface ? in.params(q) : in.coh;
+    const int na = in.iface(q, k), nb = in.iface(q, D + k);
+    SlipPoint<D> sl = fresh ? zero_slip<D>() : load_slip<D>(in.islip, q, k);
+    double d[D], ds[D], du[D], fb[D];
+    separation(q, k, d);
+    for (int i = 0; i < D; ++i) {
+      ds[i] = d[i] - dn * n.v[i];  // (as interface_point_forces has it)
+      du[i] = fresh ? 0.0 : (v(nb, i) - v(na, i)) * in.step_dt;
+    }
+    FrictionStep<D> r;
+    for (int i = 0; i < D; ++i) r.f[i] = fb[i] = r.dg[i] = 0.0;
+    CohesivePoint h{};
+    h.wd = wd;
+    residual_friction<D>(p, n.v, d, dn, ds, ap, tc, dD, du, fresh, h, sl, r.f, fb, r.dg);
+    store_slip<D>(in.islip, q, k, sl);
+    r.wd = h.wd;
+    return r;
+  }
+  struct PointSlip {
+    const LeanInterfaceForces& f;
+    int q, k;
+    bool stored = false;  // the friction step ran (and stored the slip state)
+    KOKKOS_INLINE_FUNCTION void friction(const CohesiveParams&, const double (&n)[D], const double (&)[D], double dn,
+                                         const double (&)[D], double ap, double tc, double dD, bool fresh,
+                                         CohesivePoint& h, double (&fa)[D], double (&fb)[D], double (&g)[D]) {
+      FrictionVec<D> nv;
+      for (int i = 0; i < D; ++i) nv.v[i] = n[i];
+      const FrictionStep<D> r = f.friction_step(q, k, nv, dn, ap, tc, dD, fresh, h.wd);
+      for (int i = 0; i < D; ++i) {
+        fa[i] += r.f[i];
+        fb[i] -= r.f[i];
+        g[i] += r.dg[i];
+      }
+      h.wd = r.wd;
+      stored = true;
+    }
+  };
+
+  // Interface q has come apart (normal n): its points fail, and it is handed over (or, without
+  // contact, carries nothing from now on). Not inlined: a rare branch, so that on CUDA the
+  // registers of its points' updates do not add to those of the common path (docs/cuda.md,
+  // "Kernel resources").
+  KOKKOS_FUNCTION FDEM_NOINLINE void fail(const int q, const FrictionVec<D> n) const {
+    for (int k = 0; k < D; ++k) {
+      const CohesiveParams p = PerIface ? in.params(q) : in.coh;
+      const bool slips = Fric && p.tanphir >= 0.0;
+      CohesivePoint h = load_point(in.ihist, q, k);
+      SlipPoint<D> sl = slips && h.dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
+      double d[D];
+      separation(q, k, d);
+      interface_fail_point<D, Fric>(d, n.v, p, h, sl);
+      store_point(in.ihist, q, k, h);
+      if (slips) store_slip<D>(in.islip, q, k, sl);
+    }
+    if (in.contact_handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
+    else in.icontact(q) = 1;
+  }
+
   template <class Acc>
   KOKKOS_INLINE_FUNCTION void operator()(const int q, Acc& acc) const {
     if (in.icontact(q)) return;
@@ -123,22 +205,11 @@ struct LeanInterfaceForces {
       apart = interface_apart<D>(xa, xb, dmg);
     }
     if (apart) {
-      for (int k = 0; k < D; ++k) {
-        const CohesiveParams p = PerIface ? in.params(q) : in.coh;
-        const bool slips = Fric && p.tanphir >= 0.0;
-        CohesivePoint h = load_point(in.ihist, q, k);
-        SlipPoint<D> sl = slips && h.dm0 > 0.0 ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
-        double d[D];
-        separation(q, k, d);
-        interface_fail_point<D, Fric>(d, n, p, h, sl);
-        store_point(in.ihist, q, k, h);
-        if (slips) store_slip<D>(in.islip, q, k, sl);
-      }
-      if (in.contact_handover) Kokkos::atomic_exchange(&in.icontact_pending(), 1);
-      else in.icontact(q) = 1;
+      FrictionVec<D> nv;
+      for (int i = 0; i < D; ++i) nv.v[i] = n[i];
+      fail(q, nv);
       return;
     }
-    const double ap = in.iarea(q);
     double g[D], dsum = 0;  // dU/dn
     for (int i = 0; i < D; ++i) g[i] = 0;
     for (int k = 0; k < D; ++k) {
@@ -146,20 +217,24 @@ struct LeanInterfaceForces {
       // they cost 20 registers)
       const CohesiveParams p = PerIface ? in.params(q) : in.coh;
       const bool slips = Fric && p.tanphir >= 0.0;
+      const double ap = in.iarea(q);  // (read again for each point, as the parameters)
       const int na = in.iface(q, k), nb = in.iface(q, D + k);
       CohesivePoint h = load_point(in.ihist, q, k);
-      const CohesivePoint h0 = h;
       const bool soft = slips && h.dm0 > 0.0;
-      SlipPoint<D> sl = soft ? load_slip<D>(in.islip, q, k) : zero_slip<D>();
-      double d[D], du[D], fa[D], fb[D];
+      double d[D], fa[D], fb[D];
       separation(q, k, d);
-      for (int i = 0; i < D; ++i) du[i] = soft ? (v(nb, i) - v(na, i)) * in.step_dt : 0.0;
-      dsum += interface_point_forces<D, Fric>(d, n, ap, p, h, sl, du, fa, fb, g);
-      if (!same_point(h, h0)) store_point(in.ihist, q, k, h);
-      if (slips && h.dm0 > 0.0) store_slip<D>(in.islip, q, k, sl);
+      PointSlip fr{*this, q, k};
+      dsum += interface_point_forces<D, Fric>(d, n, ap, p, h, fr, fa, fb, g);
+      // the history as read (again: held through the update, it costs registers) decides the write
+      if (!same_point(h, load_point(in.ihist, q, k))) store_point(in.ihist, q, k, h);
+      // a point that began to soften in this step with no damage yet: its slip state starts at
+      // zero (the friction step stores the others'; a softening point's state stays otherwise)
+      if (slips && h.dm0 > 0.0 && !soft && !fr.stored) store_slip<D>(in.islip, q, k, zero_slip<D>());
+      // fb is -fa, bit for bit (negation is exact and rounding symmetric: the friction's
+      // fa + f and -fa - f agree); not held through the point's update
       for (int i = 0; i < D; ++i) {
         acc(na, i) += fa[i];
-        acc(nb, i) += fb[i];
+        acc(nb, i) += -fa[i];
       }
     }
     double dm[D][D];

@@ -178,14 +178,31 @@ KOKKOS_INLINE_FUNCTION void residual_friction(const CohesiveParams& p, const dou
   }
 }
 
+// What interface_point_forces does with a softening point's residual friction: `Friction`
+// policy with friction(p, n, d, dn, ds, ap, tc, dD, fresh, h, fa, fb, g), given the point's
+// parameters, normal, separation and its normal and tangential parts, area, cohesive shear
+// traction, damage rise, whether it began to soften in this step, its history and forces. Here:
+// the slip state and the step's motion in the caller's arrays (the fused kernel);
+// LeanInterfaceForces (kernels/forces.hpp) has its own, which reads them where they are needed.
+template <int D>
+struct SlipInArrays {
+  SlipPoint<D>& sl;
+  const double (&du)[D];
+  KOKKOS_INLINE_FUNCTION void friction(const CohesiveParams& p, const double (&n)[D], const double (&d)[D], double dn,
+                                       const double (&ds)[D], double ap, double tc, double dD, bool fresh,
+                                       CohesivePoint& h, double (&fa)[D], double (&fb)[D], double (&g)[D]) const {
+    residual_friction<D>(p, n, d, dn, ds, ap, tc, dD, du, fresh, h, sl, fa, fb, g);
+  }
+};
+
 // One point's share of interface_forces: updates its history and returns its damage; d: its
 // separation (B node less A node); fa, fb: the forces on its node pair without the normal's change
-// (interface_normal_forces); g += dU/dn.
-template <int D, bool Fric = false>
+// (interface_normal_forces); g += dU/dn. Fric: a softening point's residual friction through the
+// policy fr (SlipInArrays).
+template <int D, bool Fric, class Friction>
 KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
-                                                     const CohesiveParams& p, CohesivePoint& h, SlipPoint<D>& sl,
-                                                     const double (&du)[D], double (&fa)[D], double (&fb)[D],
-                                                     double (&g)[D]) {
+                                                     const CohesiveParams& p, CohesivePoint& h, Friction& fr,
+                                                     double (&fa)[D], double (&fb)[D], double (&g)[D]) {
   double ds[D], dn = 0;
   for (int i = 0; i < D; ++i) dn += d[i] * n[i];
   double ds2 = 0;
@@ -204,9 +221,17 @@ KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const
   }
   if constexpr (Fric) {
     if (p.tanphir >= 0.0 && dmg > 0.0)
-      residual_friction<D>(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, du, fresh, h, sl, fa, fb, g);
+      fr.friction(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, fresh, h, fa, fb, g);
   }
   return dmg;
+}
+template <int D, bool Fric = false>
+KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
+                                                     const CohesiveParams& p, CohesivePoint& h, SlipPoint<D>& sl,
+                                                     const double (&du)[D], double (&fa)[D], double (&fb)[D],
+                                                     double (&g)[D]) {
+  SlipInArrays<D> fr{sl, du};
+  return interface_point_forces<D, Fric>(d, n, ap, p, h, fr, fa, fb, g);
 }
 
 // The mid-surface's edges from its first point, m_k - m_0 with m_k = (xa_k + xb_k) / 2 (k >= 1):
