@@ -5,11 +5,16 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iostream>
 #include <map>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "common/error.hpp"
 #include "scenes.hpp"
 #include "solver/simulation.hpp"
 #include "solver_fixtures.hpp"
@@ -202,6 +207,76 @@ void narrow_phase_exact_test() {
   }
   EXPECT_EQ(host_pairs(c2, over->m.nn), host_pairs(c0, ref->m.nn));
 }
+
+// The narrow phase by teams (ContactTeamPoints, the GPUs' path: the gaps of a point with more
+// candidates than team_above shared among a team's threads) gives the plain pass's run: on the
+// host threads the points go to other threads (so the sums add in another order), hence to
+// round-off: positions within 1e-12 of the block's size (4 cm) after 150 steps, the same contacts, the
+// energies to 1e-9. team_above 1: nearly every point with candidates takes the team path.
+template <int D>
+void narrow_phase_teams_test() {
+  const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
+  auto run = [&](int above) {
+    auto sim = std::make_unique<Simulation<D>>(pressed_case<D>(0.004), mesh);
+    ContactSystem<D>* ct = sim->contact();
+    ct->team_above = above;
+    fail_interfaces(*sim, [](int q) { return q % 2 == 0; });
+    ct->check_failures(sim->m);
+    fdem_test::shake(*sim, 0.2);
+    for (int s = 0; s < 150; ++s) sim->step(s % 25 == 0);
+    return sim;
+  };
+  const auto ref = run(0), teams = run(1);
+  const ContactSystem<D>& c0 = *ref->contact();
+  const ContactSystem<D>& c1 = *teams->contact();
+  ASSERT_GT(c0.active_contacts(), 0);
+  int heavy = 0;  // points that took the team path
+  {
+    auto off = fdem_test::host_view(c0.pairs().off);
+    for (int s = 0; s < ref->m.nn; ++s) heavy += off(s + 1) - off(s) > 1 ? 1 : 0;
+  }
+  EXPECT_GT(heavy, 10);
+  const auto x0 = fdem_test::host_view(ref->m.x), x1 = fdem_test::host_view(teams->m.x);
+  double dmax = 0;
+  for (int i = 0; i < ref->m.nn; ++i)
+    for (int k = 0; k < D; ++k) dmax = std::max(dmax, std::abs(x1(i, k) - x0(i, k)));
+  {
+    const Kokkos::TeamPolicy<ExecSpace> probe(1, 1);
+    const int ts = std::min(kNarrowTeamSize,
+                            probe.team_size_max(ContactTeamPoints<ContactForcesFn<D, true, kSubsetCap, 1>>{},
+                                                Kokkos::ParallelReduceTag()));
+    std::cout << D << "D: " << heavy << " points with more than one candidate, teams of " << ts
+              << " threads, largest position difference " << dmax << " m\n";
+  }
+  EXPECT_LT(dmax, 4e-14) << "the block is 4 cm";
+  EXPECT_EQ(c1.active_contacts(), c0.active_contacts());
+  EXPECT_NEAR(c1.elastic_energy(), c0.elastic_energy(), 1e-9 * std::abs(c0.elastic_energy()));
+  EXPECT_NEAR(c1.dissipated(), c0.dissipated(), 1e-9 * std::abs(c0.dissipated()) + 1e-300);
+  EXPECT_GT(c0.elastic_energy(), 0.0);
+}
+
+// The bound of the team path from the environment (GPUs): a whole number >= 0, else an error that
+// names the variable.
+TEST(ContactLists, NarrowTeamBoundFromTheEnvironment) {
+  EXPECT_EQ(parse_narrow_team_above(nullptr, 16), 16);
+  EXPECT_EQ(parse_narrow_team_above("", 16), 16);
+  EXPECT_EQ(parse_narrow_team_above("0", 16), 0);
+  EXPECT_EQ(parse_narrow_team_above("48", 16), 48);
+  for (const char* bad : {"-1", "12x", "abc", "1e3", "99999999"}) {
+    try {
+      parse_narrow_team_above(bad, 16);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("FDEM_NARROW_TEAM_ABOVE"), std::string::npos) << e.what();
+    }
+  }
+  const bool host = std::is_same<MemSpace, Kokkos::HostSpace>::value;
+  EXPECT_EQ(narrow_team_above(),
+            host ? 0 : parse_narrow_team_above(std::getenv("FDEM_NARROW_TEAM_ABOVE"), kNarrowTeamAbove));
+}
+
+TEST(ContactLists, NarrowPhaseByTeamsGivesThePlainPass2D) { narrow_phase_teams_test<2>(); }
+TEST(ContactLists, NarrowPhaseByTeamsGivesThePlainPass3D) { narrow_phase_teams_test<3>(); }
 
 TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets2D) { narrow_phase_exact_test<2>(); }
 TEST(ContactLists, NarrowPhaseDoesNotDependOnTheSkinOrTheSubsets3D) { narrow_phase_exact_test<3>(); }

@@ -74,18 +74,22 @@ KOKKOS_INLINE_FUNCTION void contact_open(const ContactLaw& L, const Kokkos::View
 // Fric = false: frictionless contact (mu = 0 and no cohesion): the shear force is zero, so the
 // shear spring is neither computed nor stored (its history stays zero; see ContactSystem::update
 // for the switch from friction to none).
-// seed (or nullptr): a shear force added to the spring's before the step, the pair's share of an
-// interface handed over at this poll (HandoverSeed, kernels/contact/narrow_phase.hpp); the
-// energy the spring then stores beyond its own is booked against the seed's (the caller releases
-// the seed's energy).
-template <int D, bool Fric = true, class Force>
+// seed: a shear force added to the spring's before the step (where seed.on(); seed[k] its
+// components), the pair's share of an interface handed over at this poll (HandoverSeed,
+// kernels/contact/narrow_phase.hpp); the energy the spring then stores beyond its own is booked
+// against the seed's (the caller releases the seed's energy). NoSeed: none.
+struct NoSeed {
+  KOKKOS_INLINE_FUNCTION bool on() const { return false; }
+  KOKKOS_INLINE_FUNCTION double operator[](int) const { return 0.0; }
+};
+template <int D, bool Fric = true, class Force, class SeedForce>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
                                          const Kokkos::View<double* [D]>& v,
                                          const Force& f, const Kokkos::View<double*>& pfn,
                                          const Kokkos::View<double*>& pac, const Kokkos::View<double*>& pg0,
                                          const Kokkos::View<double* [D]>& pfs, int j, int s, int fc,
                                          const double (&xs)[D], const double (&vs)[D], double A, double limit,
-                                         double budget, double dt, const double* seed, ContactSums& sums) {
+                                         double budget, double dt, const SeedForce& seed, ContactSums& sums) {
   const bool was = pfn(j) > 0.0;
   double g0 = pg0(j);
   if (!(A > 0.0) && !(was || g0 < 0.0)) return;  // not in contact, nothing to update
@@ -128,7 +132,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
     double fs[D], dun = 0, fsn = 0, f2old = 0;
     for (int k = 0; k < D; ++k) {
       dun += du[k] * n[k];
-      fs[k] = (was ? pfs(j, k) * scale : 0.0) + (seed ? seed[k] : 0.0);
+      fs[k] = (was ? pfs(j, k) * scale : 0.0) + (seed.on() ? seed[k] : 0.0);
       f2old += was ? pfs(j, k) * pfs(j, k) : 0.0;
       fsn += fs[k] * n[k];
     }
@@ -136,7 +140,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
     const bool joint = S.fmu.extent(0) > 0 && S.fmu(fc) >= 0.0;
     const FrictionLaw fl{L.ks, joint ? S.fmu(fc) / L.srf : L.mu, L.coh};
     const ShearStep<D> sh = coulomb_shear<D>(fl, n, A, Fn, fs, fsn, du, dun);
-    if (was || seed) sums.dissipated += 0.5 * ((was ? f2old / pac(j) : 0.0) - sh.f2 / A) / L.ks;
+    if (was || seed.on()) sums.dissipated += 0.5 * ((was ? f2old / pac(j) : 0.0) - sh.f2 / A) / L.ks;
     if (sh.slipped) sums.dissipated += sh.slip;
     for (int k = 0; k < D; ++k) Fs[k] = sh.Fs[k];
   }

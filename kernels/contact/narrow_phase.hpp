@@ -20,6 +20,8 @@ struct PairScratch {
   // host backends with several threads: the prefix sum of the points' work (BalancedPoints), one
   // entry per surface point and one more; empty on GPUs
   Kokkos::View<int*> work;
+  // the passes with seeds (Seed 2): each point's HandoverSeed (SeedRow), one row per surface point
+  Kokkos::View<double* [D + 6], Kokkos::LayoutRight> seed;
 };
 
 // Node s against a free element e (all its faces are surfaces: a fragment that is one element):
@@ -142,6 +144,60 @@ struct HandoverSeed {
   double un = 0, us = 0, fn = 0;  // fn: its share of the compressive penalty's force (magnitude)
   double F[D] = {};
   bool any = false;
+  // the values as contacts reads them (SeedRow: the same from the pass's scratch)
+  KOKKOS_INLINE_FUNCTION double n_energy() const { return un; }
+  KOKKOS_INLINE_FUNCTION double s_energy() const { return us; }
+  KOKKOS_INLINE_FUNCTION double n_force() const { return fn; }
+  KOKKOS_INLINE_FUNCTION double force(int k) const { return F[k]; }
+  KOKKOS_INLINE_FUNCTION bool has() const { return any; }
+  // a new contact of the node (area Anode) starts as deep as carries the seed's force share, or as
+  // stores its energy share where that is less (a node whose contact area is smaller than the
+  // interface points' share: the rest comes as the body settles)
+  KOKKOS_INLINE_FUNCTION double limit(const ContactLaw& L, double Anode) const {
+    return un > 0.0 ? kmin(kmath::sqrt(2.0 * un / (L.kn * Anode)), fn / (L.kn * Anode)) : 0.0;
+  }
+  // the factor on F so that the node's shear springs store at most us
+  KOKKOS_INLINE_FUNCTION double cut(const ContactLaw& L, double Anode) const {
+    double F2 = 0;
+    for (int k = 0; k < D; ++k) F2 += F[k] * F[k];
+    return F2 > 2.0 * L.ks * Anode * us ? kmath::sqrt(2.0 * L.ks * Anode * us / F2) : 1.0;
+  }
+};
+// The shear force a pair's spring starts with (contact_pair's SeedForce): the seed's F scaled by
+// the pair's share (the force read where contact_pair adds it).
+template <class SeedT>
+struct ScaledSeed {
+  const SeedT& seed;
+  double scale;
+  KOKKOS_INLINE_FUNCTION bool on() const { return seed.has(); }
+  KOKKOS_INLINE_FUNCTION double operator[](int k) const { return scale * seed.force(k); }
+};
+
+// A point's HandoverSeed in the pass's scratch (PairScratch::seed, row i: un, us, fn, F, any, and
+// limit and cut at the node's area), read where contacts needs each value: on GPUs the seed then
+// holds no registers through the contacts but the row's address (docs/cuda.md, "Kernel
+// resources"). The rows are LayoutRight: one thread reads one row, in a rare pass.
+template <int D>
+struct SeedRow {
+  using View = Kokkos::View<double* [D + 6], Kokkos::LayoutRight>;
+  const double* r;
+  static KOKKOS_INLINE_FUNCTION void store(const View& v, int i, const HandoverSeed<D>& s, const ContactLaw& L,
+                                           double Anode) {
+    v(i, 0) = s.un;
+    v(i, 1) = s.us;
+    v(i, 2) = s.fn;
+    for (int k = 0; k < D; ++k) v(i, 3 + k) = s.F[k];
+    v(i, 3 + D) = s.any ? 1.0 : 0.0;
+    v(i, 4 + D) = s.limit(L, Anode);
+    v(i, 5 + D) = s.cut(L, Anode);
+  }
+  KOKKOS_INLINE_FUNCTION double n_energy() const { return r[0]; }
+  KOKKOS_INLINE_FUNCTION double s_energy() const { return r[1]; }
+  KOKKOS_INLINE_FUNCTION double n_force() const { return r[2]; }
+  KOKKOS_INLINE_FUNCTION double force(int k) const { return r[3 + k]; }
+  KOKKOS_INLINE_FUNCTION bool has() const { return r[3 + D] != 0.0; }
+  KOKKOS_INLINE_FUNCTION double limit(const ContactLaw&, double) const { return r[4 + D]; }
+  KOKKOS_INLINE_FUNCTION double cut(const ContactLaw&, double) const { return r[5 + D]; }
 };
 
 // Whether node a overhangs in the direction t (a unit vector in the interface's plane, from its
@@ -245,9 +301,10 @@ KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S,
 #define FDEM_NARROW_GAPS_FIRST 0
 #endif
 
-// Seed: 0, the pass reads `seeding` (host backends); 1, no node has a seed; 2, seeds are read. GPUs
-// take 1 or 2 by `seeding` at the launch: the seeds' values (a rare pass: the polls with handovers)
-// then cost the common pass no registers (docs/cuda.md, "Kernel resources").
+// Seed: 0, the pass reads `seeding` (host backends); 1, no node has a seed; 2, the seeds are in
+// scr.seed (PointSeeds wrote them before the pass). GPUs take 1 or 2 by `seeding` at the launch:
+// the seeds' values (a rare pass: the polls with handovers) then cost the common pass no
+// registers (docs/cuda.md, "Kernel resources").
 template <int D, bool Fric, int Cap = kSubsetCap, int Seed = 0>
 struct ContactForcesFn {
   using Subset = PairSubset<Cap>;
@@ -265,7 +322,28 @@ struct ContactForcesFn {
   bool seeding;
   KOKKOS_INLINE_FUNCTION bool seeds() const { return Seed == 0 ? seeding : Seed == 2; }
 
-  KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const {
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactSums& sums) const { point<false>(i, sums); }
+
+  // The candidates of point i that gets its contacts (0 for a point only followed).
+  KOKKOS_INLINE_FUNCTION int candidates(const int i) const {
+    if (i >= nforce) return 0;
+    const int s = pts(i);
+    return P.off(s + 1) - P.off(s);
+  }
+
+  // The gap of point i to its candidates b <= j < e into scr.g (a team's threads take a share each:
+  // ContactTeamPoints).
+  KOKKOS_INLINE_FUNCTION void gap(const int i, const int j) const {
+    const int s = pts(i);
+    double xs[D], n[D], wv[D];
+    for (int k = 0; k < D; ++k) xs[k] = x(s, k);
+    scr.g(j) = face_gap_geo<D>(S.fgeo, S.fslot(P.face(j)), xs, n, wv);
+  }
+
+  // Point i's passes (weigh, share, release, contacts). Ready: the gaps of its candidates are in
+  // scr.g already (ContactTeamPoints).
+  template <bool Ready>
+  KOKKOS_INLINE_FUNCTION void point(const int i, ContactSums& sums) const {
     auto f = scatter.access();
     const int s = pts(i);
     double xs[D], d2 = 0, v2 = 0;
@@ -279,7 +357,10 @@ struct ContactForcesFn {
     if (i >= nforce) return;
     const int b = P.off(s), e = P.off(s + 1);
     if (b == e) {
-      if (seeds()) {
+      if constexpr (Seed == 2) {
+        const SeedRow<D> seed{&scr.seed(i, 0)};
+        sums.dissipated += seed.n_energy() + seed.s_energy();  // no contact to take it
+      } else if (seeds()) {
         const HandoverSeed<D> seed = handover_seed<D>(S, in, x, s);
         sums.dissipated += seed.un + seed.us;  // no contact to take it
       }
@@ -289,23 +370,21 @@ struct ContactForcesFn {
     Subset sub;
     sub.b = b;
     sub.e = e;
-    weigh<false>(s, b, e, xs, sub);
+    weigh<false, Ready>(s, b, e, xs, sub);
     if (sub.n > Cap) {  // overflow: the later passes visit every pair, so every pair gets its scratch
       sub.n = 0;
-      weigh<true>(s, b, e, xs, sub);
+      // (host backends and Ready: every gap is in scr.g already)
+      weigh<true, Ready || FDEM_NARROW_GAPS_FIRST != 0>(s, b, e, xs, sub);
     }
     share(sub);
     release(sub, Anode);
     // the seed only now (it is not used before): on GPUs the registers of the passes above stay
     // free of it (docs/cuda.md, "Kernel resources")
-    const HandoverSeed<D> seed = seeds() ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{};
-    // the node's position and velocity read again (not held through the passes above: registers)
-    double xn[D], vs[D];
-    for (int k = 0; k < D; ++k) {
-      xn[k] = x(s, k);
-      vs[k] = v(s, k);
+    if constexpr (Seed == 2) {  // (written by the pass's seed kernel: PointSeeds)
+      contacts(f, s, sub, SeedRow<D>{&scr.seed(i, 0)}, sums);
+    } else {
+      contacts(f, s, sub, seeds() ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{}, sums);
     }
-    contacts(f, s, sub, xn, vs, Anode, seed, sums);
   }
 
   // 1. the weight of every pair (w: 0 not in contact; phi < 0 marks a free element's), with the
@@ -315,33 +394,32 @@ struct ContactForcesFn {
   //    faces: gap, normal and fade at the face's edge (0: not near) here, the weight in 2.
   //    The pairs the later passes visit go to sub; All: every pair gets its scratch (the others
   //    weight 0, no fade, no depth), for a node whose subset overflows.
-  template <bool All>
+  template <bool All, bool Ready>
   KOKKOS_INLINE_FUNCTION void weigh(int s, int b, int e, const double (&xs)[D], Subset& sub) const {
     int last_e = -1, last_a = -1;
     double last_d = 0.0;
-#if FDEM_NARROW_GAPS_FIRST
     // host CPUs: the gaps of all candidates first, in a loop without a branch, so that the core
     // reads their face rows (one random row each) side by side; in the loop below a branch on
     // each gap would wait for its row, and a mispredicted one (the outcome is about even) throws
-    // away the reads begun after it. GPUs hide the latency with other threads instead.
-    for (int j = b; j < e; ++j) {
-      double n[D], wv[D];
-      scr.g(j) = face_gap_geo<D>(S.fgeo, S.fslot(P.face(j)), xs, n, wv);
-    }
-#endif
+    // away the reads begun after it. GPUs hide the latency with other threads instead, or take
+    // the gaps of a point with many candidates from the threads of its team (Ready).
+    constexpr bool from_scratch = Ready || FDEM_NARROW_GAPS_FIRST;
+    if constexpr (!Ready && FDEM_NARROW_GAPS_FIRST) all_gaps(b, e, xs);
     for (int j = b; j < e; ++j) {
       const double fn = P.fn(j);
       const bool hist = fn > 0.0 || P.g0(j) < 0.0;
       const int fc = P.face(j);
       double n[D], N[D], wv[D];  // normal, barycentric coordinates, offset from the face
-#if FDEM_NARROW_GAPS_FIRST
-      const double g = scr.g(j);
-      const bool far = !hist && !(g < L.dpen);
-      if (!far) face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);  // n and wv (the same g)
-#else
-      const double g = face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);
-      const bool far = !hist && !(g < L.dpen);
-#endif
+      double g;
+      bool far;
+      if constexpr (from_scratch) {
+        g = scr.g(j);
+        far = !hist && !(g < L.dpen);
+        if (!far) face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);  // n and wv (the same g)
+      } else {
+        g = face_gap_geo<D>(S.fgeo, S.fslot(fc), xs, n, wv);
+        far = !hist && !(g < L.dpen);
+      }
       // in front of the face by dpen or more: not near, and outside the face's element (no
       // weight when that is a free element either); most candidates end here
       if (far) {
@@ -393,6 +471,14 @@ struct ContactForcesFn {
       scr.phi(j) = phi;  // a free element's (-1), no weight (0: only the history to update), or the fade
       if (phi > 0.0)
         for (int k = 0; k < D; ++k) scr.n(j, k) = n[k];
+    }
+  }
+
+  // the gaps of the candidates b <= j < e into scr.g, in a loop without a branch (see weigh)
+  KOKKOS_INLINE_FUNCTION void all_gaps(int b, int e, const double (&xs)[D]) const {
+    for (int j = b; j < e; ++j) {
+      double n[D], wv[D];
+      scr.g(j) = face_gap_geo<D>(S.fgeo, S.fslot(P.face(j)), xs, n, wv);
     }
   }
 
@@ -481,19 +567,10 @@ struct ContactForcesFn {
   //    take their weight's share of un as budget, and each contact's shear spring starts with
   //    its weight's share of F (cut so that the springs store at most us); the seed is released
   //    here and what the contacts take is booked back.
-  template <class Force>
-  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const double (&xs)[D],
-                                       const double (&vs)[D], double Anode, const HandoverSeed<D>& seed,
+  template <class Force, class SeedT>
+  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const SeedT& seed,
                                        ContactSums& sums) const {
-    // a new contact starts as deep as carries the seed's force share, or as stores its energy
-    // share where that is less (a node whose contact area is smaller than the interface points'
-    // share: the rest comes as the body settles)
-    const double seed_lim =
-        seed.un > 0.0 ? kmin(kmath::sqrt(2.0 * seed.un / (L.kn * Anode)), seed.fn / (L.kn * Anode)) : 0.0;
-    double seed_f[D], F2 = 0;
-    for (int k = 0; k < D; ++k) F2 += seed.F[k] * seed.F[k];
-    const double cs = F2 > 2.0 * L.ks * Anode * seed.us ? kmath::sqrt(2.0 * L.ks * Anode * seed.us / F2) : 1.0;
-    sums.dissipated += seed.us;
+    sums.dissipated += seed.s_energy();
     // the pairs that release energy (rel > 0: contacts whose weight fell, a few per node), listed
     // as in share so that the budgets cost the releasing pairs, not all candidates
     int relj[kNear];
@@ -513,9 +590,13 @@ struct ContactForcesFn {
       const int fc = P.face(j);
       const double w = scr.w(j);
       if (!(w > 0.0) && !(P.fn(j) > 0.0) && !(P.g0(j) < 0.0)) continue;  // as contact_pair: nothing to do
+      const double Anode = S.narea(s);  // (read for each pair, as the position: registers)
       double lim = w > 0.0 && !(scr.depth(j) >= 0.0) ? related(sub, fc) / kmath::sqrt(Anode * w) : 0.0;
-      if (w > 0.0 && !(scr.depth(j) >= 0.0)) lim = lim > seed_lim ? lim : seed_lim;
-      double budget = w > 0.0 && scr.depth(j) >= 0.0 ? w * seed.un : 0.0;
+      if (w > 0.0 && !(scr.depth(j) >= 0.0)) {
+        const double seed_lim = seed.limit(L, Anode);
+        lim = lim > seed_lim ? lim : seed_lim;
+      }
+      double budget = w > 0.0 && scr.depth(j) >= 0.0 ? w * seed.n_energy() : 0.0;
       if (w > 0.0 && scr.depth(j) >= 0.0 && Anode * w > P.ac(j) && nrel > 0) {
         if (listed) {
           for (int u = 0; u < nrel; ++u) {
@@ -536,16 +617,59 @@ struct ContactForcesFn {
       const double ge_old = scr.g(j) - P.g0(j), ac_old = P.fn(j) > 0.0 ? P.ac(j) : 0.0;
       const bool counts =
           ge_old < 0.0 && scr.g(j) > -L.dpen && !(scr.phi(j) < 0.0) && (P.fn(j) > 0.0 || lim > 0.0);
-      for (int k = 0; k < D; ++k) seed_f[k] = cs * w * seed.F[k];
+      // the node's position and velocity read for each pair (not held through the loop: registers)
+      double xs[D], vs[D];
+      for (int k = 0; k < D; ++k) {
+        xs[k] = x(s, k);
+        vs[k] = v(s, k);
+      }
       contact_pair<D, Fric>(S, L, v, f, P.fn, P.ac, P.g0, P.fs, j, s, fc, xs, vs, Anode * w, lim, budget, dt,
-                            seed.any ? seed_f : nullptr, sums);
+                            ScaledSeed<SeedT>{seed, seed.cut(L, Anode) * w}, sums);
       if (counts) {
         const double ge = scr.g(j) - P.g0(j);
         moved += 0.5 * L.kn * (P.ac(j) * ge * ge - ac_old * ge_old * ge_old);
       }
     }
-    moved -= seed.un;
+    moved -= seed.n_energy();
     if (moved < 0.0) sums.dissipated -= moved;
+  }
+};
+
+// The narrow phase by teams (GPUs: a warp each, kNarrowTeamSize threads): team t takes the
+// points t T ... t T + T - 1, a thread each, as the plain kernel does; but the gaps of a point with
+// more than `above` candidates (a node where a body has fragmented: its candidates run to the
+// hundreds while its neighbours' are a few dozen) are shared by all the team's threads first, so
+// that its thread's passes only read them (the gaps are most of a point's work: one random face
+// row per candidate), and the warp does not wait on one thread's long loop. The sums are the plain
+// kernel's, point by point (only the order of the threads' sums differs).
+inline constexpr int kNarrowTeamSize = 32;
+#ifndef FDEM_NARROW_TEAM_ABOVE
+#define FDEM_NARROW_TEAM_ABOVE 16
+#endif
+inline constexpr int kNarrowTeamAbove = FDEM_NARROW_TEAM_ABOVE;  // 0: no teams (the plain kernel)
+template <class Fn>
+struct ContactTeamPoints {
+  Fn fn;
+  int np, above;
+  using Member = typename Kokkos::TeamPolicy<ExecSpace>::member_type;
+  KOKKOS_INLINE_FUNCTION void operator()(const Member& t, ContactSums& sums) const {
+    const int i0 = t.league_rank() * t.team_size(), i1 = kmin(i0 + t.team_size(), np);
+    // 1. the gaps of the team's heavy points, each thread a share of each one's candidates (the
+    //    test on the count is the same in every thread of the team)
+    bool any = false;
+    for (int i = i0; i < i1; ++i) {
+      const int c = fn.candidates(i);
+      if (c <= above) continue;
+      any = true;
+      const int b = fn.P.off(fn.pts(i));
+      Kokkos::parallel_for(Kokkos::TeamThreadRange(t, b, b + c), [&](const int j) { fn.gap(i, j); });
+    }
+    if (any) t.team_barrier();
+    // 2. each thread its own point: a heavy one from its gaps
+    const int i = i0 + t.team_rank();
+    if (i >= i1) return;
+    if (fn.candidates(i) > above) fn.template point<true>(i, sums);
+    else fn.template point<false>(i, sums);
   }
 };
 
@@ -582,6 +706,41 @@ struct BalancedPoints {
   }
 };
 
+// The seeds of the first nforce points into scr.seed (SeedRow), for a pass with Seed 2: a kernel of
+// their own, so that their computation costs the pass no registers.
+template <int D>
+struct PointSeeds {
+  Kokkos::View<int*> pts;
+  ContactSurface<D> S;
+  InterfaceData<D> in;
+  Kokkos::View<double* [D]> x;
+  typename SeedRow<D>::View seed;
+  ContactLaw L;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
+    const int s = pts(i);
+    SeedRow<D>::store(seed, i, handover_seed<D>(S, in, x, s), L, S.narea(s));
+  }
+};
+
+// One narrow-phase pass of fn over the np points: one thread per point, or, above > 0, by teams
+// (ContactTeamPoints; kNarrowTeamSize threads on GPUs, what the host backend allows up to that).
+template <class Fn>
+void narrow_pass(const Fn& fn, int np, int above, const Kokkos::View<ContactSums>& pass) {
+  if (above > 0 && np > 0) {
+    const ContactTeamPoints<Fn> tp{fn, np, above};
+    int ts = kNarrowTeamSize;
+    if constexpr (std::is_same<MemSpace, Kokkos::HostSpace>::value) {
+      const Kokkos::TeamPolicy<ExecSpace> probe(1, 1);
+      ts = kmin(ts, probe.team_size_max(tp, Kokkos::ParallelReduceTag()));
+    }
+    Kokkos::parallel_reduce("fdem::contact::forces_teams [device]",
+                            Kokkos::TeamPolicy<ExecSpace, HeavyLaunchBounds>((np + ts - 1) / ts, ts), tp, pass);
+    return;
+  }
+  Kokkos::parallel_reduce("fdem::contact::forces [device]", Kokkos::RangePolicy<ExecSpace, HeavyLaunchBounds>(0, np),
+                          fn, pass);
+}
+
 // Contact forces of all surface nodes `points` against their candidate faces; adds them to m.f
 // with atomics and updates the pair history. dt: the step (relative displacement increments are
 // v(n-1/2) dt, as for the platens). xb: positions at the last build.
@@ -604,17 +763,20 @@ struct BalancedPoints {
 // On host backends with several threads the points go to the threads in ranges of equal work
 // (BalancedPoints; scratch.work must then hold np + 1 entries, else the plain range runs).
 // seeding: interfaces were handed over at this poll (HandoverSeed).
+// team_above > 0: the points with more candidates share their gaps among a team's threads
+// (ContactTeamPoints; the GPUs' default, kNarrowTeamAbove); 0: one thread per point (on host
+// backends with several threads, in ranges of equal work).
 template <int D, bool Fric = true, int Cap = kSubsetCap>
 void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np, int nforce, const PairList<D>& P,
                     const PairScratch<D>& scratch, const ContactSurface<D>& surf, const ContactLaw& law,
                     double dt, const Kokkos::View<double* [D]>& xb, const ForceScatter<D>& sf,
-                    const Kokkos::View<ContactSums>& pass, bool seeding) {
+                    const Kokkos::View<ContactSums>& pass, bool seeding, int team_above) {
   // (host backends only: `if constexpr`, so that a device build compiles no kernel for it)
   if constexpr (std::is_same<MemSpace, Kokkos::HostSpace>::value) {
     const ContactForcesFn<D, Fric, Cap> fn{m.x,  m.v, xb, sf,           points, P,      scratch,
                                            surf, law, dt, nforce, m.interfaces(), seeding};
     const int nt = ExecSpace().concurrency();
-    if (nt > 1 && np > 0 && static_cast<int>(scratch.work.extent(0)) > np) {
+    if (team_above <= 0 && nt > 1 && np > 0 && static_cast<int>(scratch.work.extent(0)) > np) {
       auto work = scratch.work;
       auto off = P.off;
       auto pts = points;
@@ -633,17 +795,64 @@ void contact_forces(const Model<D>& m, const Kokkos::View<int*>& points, int np,
     }
   }
   // (GPUs: under HeavyLaunchBounds, kernels/fdem_kokkos.hpp; the pass with seeds apart)
-  const Kokkos::RangePolicy<ExecSpace, HeavyLaunchBounds> policy(0, np);
+  if (seeding && nforce > 0)
+    Kokkos::parallel_for("fdem::contact::seeds", Kokkos::RangePolicy<ExecSpace>(0, nforce),
+                         PointSeeds<D>{points, surf, m.interfaces(), m.x, scratch.seed, law});
   if (seeding)
-    Kokkos::parallel_reduce("fdem::contact::forces [device]", policy,
-                            ContactForcesFn<D, Fric, Cap, 2>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt,
-                                                             nforce, m.interfaces(), seeding},
-                            pass);
+    narrow_pass(ContactForcesFn<D, Fric, Cap, 2>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt, nforce,
+                                                 m.interfaces(), seeding},
+                np, team_above, pass);
   else
-    Kokkos::parallel_reduce("fdem::contact::forces [device]", policy,
-                            ContactForcesFn<D, Fric, Cap, 1>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt,
-                                                             nforce, m.interfaces(), seeding},
-                            pass);
+    narrow_pass(ContactForcesFn<D, Fric, Cap, 1>{m.x, m.v, xb, sf, points, P, scratch, surf, law, dt, nforce,
+                                                 m.interfaces(), seeding},
+                np, team_above, pass);
+}
+
+// How the candidates spread over the first n points (ContactSystem::candidate_spread): v = points,
+// pairs, then the points above each of the bounds 16, 32, 64 and 128 candidates, and their pairs;
+// the largest count.
+inline constexpr int kSpreadSumsBounds = 4;
+struct SpreadSums {
+  long v[2 + 2 * kSpreadSumsBounds] = {};
+  int max = 0;
+  KOKKOS_INLINE_FUNCTION SpreadSums& operator+=(const SpreadSums& o) {
+    for (int k = 0; k < 2 + 2 * kSpreadSumsBounds; ++k) v[k] += o.v[k];
+    max = o.max > max ? o.max : max;
+    return *this;
+  }
+#if KOKKOS_VERSION < 40000
+  KOKKOS_INLINE_FUNCTION void operator+=(const volatile SpreadSums& o) volatile {
+    for (int k = 0; k < 2 + 2 * kSpreadSumsBounds; ++k) v[k] += o.v[k];
+    max = o.max > max ? o.max : max;
+  }
+#endif
+};
+}  // namespace fdem
+namespace Kokkos {
+template <>
+struct reduction_identity<fdem::SpreadSums> {
+  KOKKOS_FORCEINLINE_FUNCTION static fdem::SpreadSums sum() { return fdem::SpreadSums(); }
+};
+}  // namespace Kokkos
+namespace fdem {
+inline SpreadSums spread_of_candidates(const Kokkos::View<int*>& off, const Kokkos::View<int*>& pts, int n) {
+  SpreadSums s;
+  Kokkos::parallel_reduce(
+      "fdem::contact::candidate_spread", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int i, SpreadSums& a) {
+        const int c = off(pts(i) + 1) - off(pts(i));
+        const int bounds[kSpreadSumsBounds] = {16, 32, 64, 128};
+        a.v[0] += 1;
+        a.v[1] += c;
+        for (int k = 0; k < kSpreadSumsBounds; ++k)
+          if (c > bounds[k]) {
+            a.v[2 + k] += 1;
+            a.v[2 + kSpreadSumsBounds + k] += c;
+          }
+        a.max = c > a.max ? c : a.max;
+      },
+      s);
+  return s;
 }
 
 // Elastic energy of the contact springs (normal and shear) at the last narrow-phase pass.

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
+#include <string>
 #include <utility>
 
 #include "common/error.hpp"
@@ -211,6 +213,10 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
       static_cast<int>(scratch_.work.extent(0)) < ns_ + 1)
     scratch_.work = Kokkos::View<int*>(Kokkos::ViewAllocateWithoutInitializing("fdem::contact::narrow_work"),
                                        std::min(nn_, 3 * ns_ / 2 + 64) + 1);
+  // the seeds of the passes after handovers (kernels/contact/narrow_phase.hpp, SeedRow; grows likewise)
+  if (static_cast<int>(scratch_.seed.extent(0)) < ns_)
+    scratch_.seed = typename SeedRow<D>::View(Kokkos::ViewAllocateWithoutInitializing("fdem::contact::narrow_seeds"),
+                                              std::min(nn_, 3 * ns_ / 2 + 64));
   need_build_ = true;
   ++surface_version_;
 }
@@ -402,7 +408,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt, Scatter& sf) {
   friction_before_ = fric || !skip_frictionless;
   const auto pass = small_subsets ? (full ? &contact_forces<D, true, 1> : &contact_forces<D, false, 1>)
                                   : (full ? &contact_forces<D, true> : &contact_forces<D, false>);
-  pass(m, slaves_, ns_, ns_own_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_, seeding);
+  pass(m, slaves_, ns_, ns_own_, cur_, scratch_, surf_, law, dt, xb_, sf, pass_, seeding, team_above);
   if (seeding) clear_handover_marks(m.icontact, ni_);
   contact_account(pass_, status_, 0.5 * skin);
   --until_recheck_;
@@ -435,6 +441,37 @@ template <int D>
 int ContactSystem<D>::active_contacts() const {
   if (!may_meet_ || ns_ == 0 || na_ == 0) return 0;
   return static_cast<int>(read_status().active);
+}
+
+int parse_narrow_team_above(const char* e, int fallback) {
+  if (!e || !*e) return fallback;
+  char* end = nullptr;
+  const long v = std::strtol(e, &end, 10);
+  if (*end != '\0' || v < 0 || v > 1000000)
+    throw InputError("environment variable FDEM_NARROW_TEAM_ABOVE='" + std::string(e) +
+                     "': a whole number of candidates from 0 (one thread per point) to 1000000");
+  return static_cast<int>(v);
+}
+
+int narrow_team_above() {
+  if (std::is_same<MemSpace, Kokkos::HostSpace>::value) return 0;
+  return parse_narrow_team_above(std::getenv("FDEM_NARROW_TEAM_ABOVE"), kNarrowTeamAbove);
+}
+
+template <int D>
+typename ContactSystem<D>::CandidateSpread ContactSystem<D>::candidate_spread() const {
+  CandidateSpread r;
+  if (ns_own_ == 0 || cur_.off.extent(0) == 0) return r;
+  static_assert(kSpreadBins == kSpreadSumsBounds, "one count per bound");
+  const SpreadSums s = spread_of_candidates(cur_.off, slaves_, ns_own_);
+  r.max = s.max;
+  r.points = s.v[0];
+  r.pairs = s.v[1];
+  for (int k = 0; k < kSpreadBins; ++k) {
+    r.points_above[k] = s.v[2 + k];
+    r.pairs_above[k] = s.v[2 + kSpreadBins + k];
+  }
+  return r;
 }
 
 template <int D>

@@ -68,6 +68,14 @@ inline double contact_penetration_depth(double min_size, double mean_size) {
   return 0.25 * (min_size > 0 ? min_size : mean_size);
 }
 
+// The default of ContactSystem::team_above: on GPUs kNarrowTeamAbove (the build's
+// FDEM_NARROW_TEAM_ABOVE), or the environment variable of that name, a whole number >= 0 (so
+// that a GPU's first minutes can compare bounds without a build each; docs/cuda.md); host
+// backends 0. A malformed value is an InputError naming it.
+int narrow_team_above();
+// The value of FDEM_NARROW_TEAM_ABOVE as narrow_team_above reads it (null or empty: fallback).
+int parse_narrow_team_above(const char* value, int fallback);
+
 template <int D>
 class ContactSystem {
  public:
@@ -106,6 +114,11 @@ class ContactSystem {
   // Tests: subsets of 1 pair per node in the narrow phase (kernels/contact/narrow_phase.hpp,
   // PairSubset), so that nodes with more relevant pairs take the overflow path (same results).
   bool small_subsets = false;
+  // The narrow phase's points with more candidates than this share their gaps among a team's
+  // threads (kernels/contact/narrow_phase.hpp, ContactTeamPoints): on GPUs by default
+  // (kNarrowTeamAbove, or the environment's FDEM_NARROW_TEAM_ABOVE: narrow_team_above); 0, one
+  // thread per point (host backends; tests set it to check the teams).
+  int team_above = narrow_team_above();
   double skin = 0;       // Verlet skin (m)
   double radius = 0;     // search distance = law.dpen + skin
 
@@ -123,6 +136,18 @@ class ContactSystem {
   bool polled() const { return polled_; }
   int active_faces() const { return na_; }
   int candidates() const { return cur_.size; }
+  // How the candidates spread over the surface points that get contacts (the narrow phase's work
+  // per point; a GPU's warp waits for its point with the most, ContactTeamPoints): the largest
+  // count, and the points and their candidates above each of kSpreadBounds (the bounds of
+  // spread_of_candidates, kernels/contact/narrow_phase.hpp).
+  static constexpr int kSpreadBins = 4;
+  static constexpr int kSpreadBounds[kSpreadBins] = {16, 32, 64, 128};
+  struct CandidateSpread {
+    int max = 0;
+    long points = 0, pairs = 0;
+    long points_above[kSpreadBins] = {}, pairs_above[kSpreadBins] = {};
+  };
+  CandidateSpread candidate_spread() const;
   // The narrow phase's work of this process's own surface points, in its units (kPointWork per
   // point plus the point's candidates; kernels/contact/narrow_phase.hpp), for the balance of a run
   // over processes (CutChecks::modelled_work, solver/cut_checks.hpp): the sum, and with a non-empty `w` also added per

@@ -137,12 +137,28 @@ nlohmann::json checkpoint_report(const RunRecord& r) {
   return ck;
 }
 
+// The candidates' spread over the surface points at the end (ContactSystem::candidate_spread): the
+// narrow phase's work per point, which GPUs share among a team's threads above a bound.
+template <int D>
+nlohmann::json spread_report(const ContactSystem<D>& ct) {
+  const auto sp = ct.candidate_spread();
+  nlohmann::json above = nlohmann::json::object();
+  for (int k = 0; k < ContactSystem<D>::kSpreadBins; ++k)
+    above[std::to_string(ContactSystem<D>::kSpreadBounds[k])] = {{"points", sp.points_above[k]},
+                                                                {"pairs", sp.pairs_above[k]}};
+  return {{"points", sp.points},
+          {"mean", sp.points > 0 ? static_cast<double>(sp.pairs) / sp.points : 0.0},
+          {"max", sp.max},
+          {"above", above}};
+}
+
 template <int D>
 nlohmann::json contact_report(ContactSystem<D>& ct, const Simulation<D>& sim) {
   if (!sim.parts().many())  // one process: its own counts (the summary's keys differ)
     return {{"interfaces_handed_over", ct.handed_over()},
             {"surface_nodes", ct.surface_nodes()},
             {"candidate_pairs", ct.candidates()},
+            {"candidates_per_point", spread_report(ct)},
             {"active_contacts", ct.active_contacts()},
             {"grid_builds", ct.builds()},
             {"list_updates", ct.list_updates()},
