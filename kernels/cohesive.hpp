@@ -51,7 +51,7 @@ static_assert(sizeof(CohesivePoint) == kPointHistory * sizeof(double),
 // damage 1 (cohesive_damage: dmax >= dmf > dm0 > 0), nothing dissipated.
 KOKKOS_INLINE_FUNCTION CohesivePoint failed_point() { return CohesivePoint{2e-300, 1e-300, 2e-300, 0.0}; }
 
-KOKKOS_INLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
+KOKKOS_FORCEINLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
   if (s.dm0 <= 0.0 || s.dmax <= s.dm0) return 0.0;
   if (s.dmax >= s.dmf) return 1.0;
   return s.dmf * (s.dmax - s.dm0) / (s.dmax * (s.dmf - s.dm0));
@@ -63,7 +63,7 @@ KOKKOS_INLINE_FUNCTION double cohesive_dissipation(const CohesivePoint& s) { ret
 // Updates the history with the separation (dn normal, ds = |tangential|) and returns the
 // tractions: tn (tension positive) and the secant shear stiffness kss so that the shear traction
 // vector is kss * delta_s_vector. Also returns the damage D.
-KOKKOS_INLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, double ds,
+KOKKOS_FORCEINLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double dn, double ds,
                                             CohesivePoint& s, double& tn, double& kss, double& D) {
   // The signs of dn decide selects, not branches (kselect).
   const double dnp = kselect(dn > 0.0, dn, 0.0);

@@ -13,7 +13,7 @@ namespace fdem {
 // current configuration. The forces use the reference area (tractions per unit reference area,
 // so that they derive from a stored energy); the current one serves the set-up.
 template <int D>
-KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
+KOKKOS_FORCEINLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
                                             double thickness, double (&n)[D], double& area_pt) {
   double m[D][D];
   for (int k = 0; k < D; ++k)
@@ -48,7 +48,7 @@ KOKKOS_INLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const doub
 // keep the penalty; with contact, interface_parted below hands them over.
 // dmg: the damage of each point (cohesive_damage).
 template <int D>
-KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
+KOKKOS_FORCEINLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
                                             const double (&dmg)[D]) {
   bool failed = false;
   for (int k = 0; k < D; ++k) failed = failed || dmg[k] >= 1.0;
@@ -81,7 +81,7 @@ KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const doub
   return false;
 }
 template <int D>
-KOKKOS_INLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
+KOKKOS_FORCEINLINE_FUNCTION bool interface_apart(const double (&xa)[D][D], const double (&xb)[D][D],
                                             const CohesivePoint (&h)[D]) {
   double dmg[D];
   for (int k = 0; k < D; ++k) dmg[k] = cohesive_damage(h[k]);
@@ -200,7 +200,7 @@ struct SlipInArrays {
 // (interface_normal_forces); g += dU/dn. Fric: a softening point's residual friction through the
 // policy fr (SlipInArrays).
 template <int D, bool Fric, class Friction>
-KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
+KOKKOS_FORCEINLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
                                                      const CohesiveParams& p, CohesivePoint& h, Friction& fr,
                                                      double (&fa)[D], double (&fb)[D], double (&g)[D]) {
   double ds[D], dn = 0;
@@ -226,7 +226,7 @@ KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const
   return dmg;
 }
 template <int D, bool Fric = false>
-KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
+KOKKOS_FORCEINLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
                                                      const CohesiveParams& p, CohesivePoint& h, SlipPoint<D>& sl,
                                                      const double (&du)[D], double (&fa)[D], double (&fb)[D],
                                                      double (&g)[D]) {
@@ -237,7 +237,7 @@ KOKKOS_INLINE_FUNCTION double interface_point_forces(const double (&d)[D], const
 // The mid-surface's edges from its first point, m_k - m_0 with m_k = (xa_k + xb_k) / 2 (k >= 1):
 // what the normal's change needs of the positions (interface_normal_forces).
 template <int D>
-KOKKOS_INLINE_FUNCTION void mid_edges(const double (&xa)[D][D], const double (&xb)[D][D], double (&e)[D - 1][D]) {
+KOKKOS_FORCEINLINE_FUNCTION void mid_edges(const double (&xa)[D][D], const double (&xb)[D][D], double (&e)[D - 1][D]) {
   for (int k = 1; k < D; ++k)
     for (int i = 0; i < D; ++i) e[k - 1][i] = 0.5 * (xa[k][i] + xb[k][i] - xa[0][i] - xb[0][i]);
 }
@@ -245,7 +245,7 @@ KOKKOS_INLINE_FUNCTION void mid_edges(const double (&xa)[D][D], const double (&x
 // The forces of the normal's change: dm[k] = dU/dm_k through the mid-surface points
 // m_k = (xa_k + xb_k) / 2 from g = dU/dn; each node of pair k takes -dm[k] / 2. e: mid_edges.
 template <int D>
-KOKKOS_INLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1][D], const double (&n)[D],
+KOKKOS_FORCEINLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1][D], const double (&n)[D],
                                                     const double (&g)[D], double (&dm)[D][D]) {
   double gp[D], gn = 0;  // projection (I - n n^T) g
   for (int i = 0; i < D; ++i) gn += g[i] * n[i];
@@ -294,7 +294,7 @@ KOKKOS_INLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1][D],
 // to soften). (The GPU's force kernel does the same point by point: LeanInterfaceForces,
 // kernels/forces.hpp.)
 template <int D, bool Fric = false>
-KOKKOS_INLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
+KOKKOS_FORCEINLINE_FUNCTION double interface_forces(const double (&xa)[D][D], const double (&xb)[D][D],
                                                double ap, const CohesiveParams& p,
                                                CohesivePoint (&h)[D], SlipPoint<D> (&sl)[D],
                                                double (&fa)[D][D], double (&fb)[D][D],

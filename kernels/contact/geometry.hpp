@@ -115,7 +115,7 @@ KOKKOS_INLINE_FUNCTION void face_geometry_of(const double (&xf)[D][D], const G& 
 // row; then the barycentric coordinates N of p's projection from w. The narrow phase takes the
 // second only for faces near enough to matter.
 template <int D, class G>
-KOKKOS_INLINE_FUNCTION double face_gap_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
+KOKKOS_FORCEINLINE_FUNCTION double face_gap_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
                                            double (&w)[D]) {
   double g = 0;
   for (int k = 0; k < D; ++k) {
@@ -126,7 +126,7 @@ KOKKOS_INLINE_FUNCTION double face_gap_geo(const G& geo, int f, const double (&p
   return g;
 }
 template <int D, class G>
-KOKKOS_INLINE_FUNCTION void face_bary_geo(const G& geo, int f, const double (&w)[D], double (&N)[D]) {
+KOKKOS_FORCEINLINE_FUNCTION void face_bary_geo(const G& geo, int f, const double (&w)[D], double (&N)[D]) {
   if constexpr (D == 2) {
     const double xi = (w[0] * geo(f, 4) + w[1] * geo(f, 5)) * geo(f, 6);
     N[0] = 1.0 - xi;
@@ -146,7 +146,7 @@ KOKKOS_INLINE_FUNCTION void face_bary_geo(const G& geo, int f, const double (&w)
 
 // face_project from the stored geometry of face f (same arithmetic).
 template <int D, class G>
-KOKKOS_INLINE_FUNCTION double face_project_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
+KOKKOS_FORCEINLINE_FUNCTION double face_project_geo(const G& geo, int f, const double (&p)[D], double (&n)[D],
                                                double (&N)[D]) {
   double w[D];
   const double g = face_gap_geo<D>(geo, f, p, n, w);

@@ -39,7 +39,7 @@ struct ElementDepth {
 };
 
 template <int D>
-KOKKOS_INLINE_FUNCTION ElementDepth element_depth(const ContactSurface<D>& S, int e, const double (&p)[D]) {
+KOKKOS_FORCEINLINE_FUNCTION ElementDepth element_depth(const ContactSurface<D>& S, int e, const double (&p)[D]) {
   ElementDepth r{1e300, -1};
   for (int a = 0; a <= D; ++a) {
     double d = S.eplane(e, a, D);
@@ -56,7 +56,7 @@ KOKKOS_INLINE_FUNCTION ElementDepth element_depth(const ContactSurface<D>& S, in
 // barycentric coordinate `score` of the projection: full on the face, fading out smoothly (C1)
 // over tol beyond its edge, so that faces meeting at an edge or vertex share a node (their
 // weights are then normalised, see contact_forces).
-KOKKOS_INLINE_FUNCTION double contact_fade(double s, double tol) {
+KOKKOS_FORCEINLINE_FUNCTION double contact_fade(double s, double tol) {
   if (s >= 0.0) return 1.0;
   if (s <= -tol) return 0.0;
   const double t = (s + tol) / tol;
@@ -69,7 +69,7 @@ KOKKOS_INLINE_FUNCTION double contact_fade(double s, double tol) {
 // surface points up, not towards the side face, and must not be pushed sideways (it would
 // plough the block). `facing` = max over the node's active faces of
 // -n_node . n_face; the weight rises smoothly from 0 at facing 0.2 to 1 at 0.5.
-KOKKOS_INLINE_FUNCTION double facing_fade(double facing) {
+KOKKOS_FORCEINLINE_FUNCTION double facing_fade(double facing) {
   if (facing >= 0.5) return 1.0;
   if (facing <= 0.2) return 0.0;
   const double t = (facing - 0.2) / 0.3;
@@ -77,7 +77,7 @@ KOKKOS_INLINE_FUNCTION double facing_fade(double facing) {
 }
 
 template <int D>
-KOKKOS_INLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, const double (&n)[D]) {
+KOKKOS_FORCEINLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, const double (&n)[D]) {
   double best = -1.0;
   for (int q = S.nfoff(s); q < S.nfoff(s + 1); ++q) {
     const int f2 = S.nface(q);
@@ -92,7 +92,7 @@ KOKKOS_INLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, con
 // Two faces of one piece: they share a vertex whose copies are joined by intact material (same
 // node, or copies in one cluster).
 template <int D>
-KOKKOS_INLINE_FUNCTION bool same_piece(const ContactSurface<D>& S, int fa, int fb) {
+KOKKOS_FORCEINLINE_FUNCTION bool same_piece(const ContactSurface<D>& S, int fa, int fb) {
   for (int i = 0; i < D; ++i) {
     const int va = S.fnode(fa, i);
     for (int k = 0; k < D; ++k) {
