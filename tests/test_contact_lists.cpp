@@ -212,7 +212,8 @@ void narrow_phase_exact_test() {
 // candidates than team_above shared among a team's threads) gives the plain pass's run: on the
 // host threads the points go to other threads (so the sums add in another order), hence to
 // round-off: positions within 1e-12 of the block's size (4 cm) after 150 steps, the same contacts, the
-// energies to 1e-9. team_above 1: nearly every point with candidates takes the team path.
+// energies to 1e-9. team_above 1: nearly every point with candidates takes the team path. Also the
+// candidates' spread of summary.json against a count on the host.
 template <int D>
 void narrow_phase_teams_test() {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
@@ -232,8 +233,32 @@ void narrow_phase_teams_test() {
   ASSERT_GT(c0.active_contacts(), 0);
   int heavy = 0;  // points that took the team path
   {
+    // and the spread of the candidates that summary.json reports (ContactSystem::candidate_spread),
+    // counted here over every node (those off the surface have none)
     auto off = fdem_test::host_view(c0.pairs().off);
-    for (int s = 0; s < ref->m.nn; ++s) heavy += off(s + 1) - off(s) > 1 ? 1 : 0;
+    typename ContactSystem<D>::CandidateSpread expect;
+    expect.points = c0.surface_nodes();
+    for (int s = 0; s < ref->m.nn; ++s) {
+      const int c = off(s + 1) - off(s);
+      heavy += c > 1 ? 1 : 0;
+      expect.pairs += c;
+      expect.max = std::max(expect.max, c);
+      for (int k = 0; k < ContactSystem<D>::kSpreadBins; ++k)
+        if (c > ContactSystem<D>::kSpreadBounds[k]) {
+          ++expect.points_above[k];
+          expect.pairs_above[k] += c;
+        }
+    }
+    const auto got = c0.candidate_spread();
+    EXPECT_EQ(got.points, expect.points);
+    EXPECT_EQ(got.pairs, expect.pairs);
+    EXPECT_EQ(got.pairs, c0.candidates());
+    EXPECT_EQ(got.max, expect.max);
+    EXPECT_GT(got.max, 1);
+    for (int k = 0; k < ContactSystem<D>::kSpreadBins; ++k) {
+      EXPECT_EQ(got.points_above[k], expect.points_above[k]) << k;
+      EXPECT_EQ(got.pairs_above[k], expect.pairs_above[k]) << k;
+    }
   }
   EXPECT_GT(heavy, 10);
   const auto x0 = fdem_test::host_view(ref->m.x), x1 = fdem_test::host_view(teams->m.x);
