@@ -2,7 +2,8 @@
 """scripts/cuda_resources.py on a recorded ptxas report (tests/data/cuda/ptxas_sample.log: three
 kernels of the project and one of Kokkos' own, from an sm_90 build): the kernels' names, registers,
 spills, occupancy at 128 threads per block (the CUDA occupancy calculator's rule for an H100),
-functor passing and objects, the Kokkos kernel left out, and --check failing on the spilling one.
+functor passing and objects, the Kokkos kernel left out, and --check failing on the spilling one;
+and a kernel that spills only at the call of an out-of-line member counted apart.
 ctest runs it (CudaResources.ReadsPtxasReport)."""
 import json
 import os
@@ -51,6 +52,22 @@ with tempfile.TemporaryDirectory() as tmp:
     r = subprocess.run([sys.executable, SCRIPT, LOG, "--check"], capture_output=True, text=True)
     check(r.returncode == 1 and "ContactForcesFn<3, true, 48, 2>" in r.stdout,
           "--check: exit %d, %s" % (r.returncode, r.stdout))
+
+# a kernel that spills only where it calls an out-of-line member (tests/data/cuda/ptxas_out_of_line.log:
+# the 3D interface kernel with residual friction and its friction_step, from an sm_90 build): counted
+# apart, not failing --check, and the callee listed with its own figures
+OOL = os.path.join(ROOT, "tests", "data", "cuda", "ptxas_out_of_line.log")
+with tempfile.TemporaryDirectory() as tmp:
+    md = os.path.join(tmp, "r.md")
+    r = subprocess.run([sys.executable, SCRIPT, OOL, "--md", md, "--check"], capture_output=True, text=True)
+    check(r.returncode == 0 and "1 spilling at an out-of-line call" in r.stdout,
+          "out-of-line call: exit %d, %s %s" % (r.returncode, r.stdout, r.stderr))
+    text = open(md).read()
+    check("| `fdem::LeanInterfaceForces<3, false, true>::friction_step` | 0 | 32 / 24 |" in text,
+          "the out-of-line table's friction_step row")
+    check("0 above 128 registers or spilling; 1 spilling only at the call" in text, "the table's count line")
+    ool = cuda_resources.out_of_line(open(OOL).read())
+    check(len(ool) == 2, "two out-of-line functions (friction_step, fail), not %d" % len(ool))
 
 for f in failures:
     print("FAIL:", f)
