@@ -4,7 +4,11 @@
 // normal and shear penalty springs (K_n A_c, K_s A_c), no tension, incremental shear force with
 // Coulomb friction and cohesion (kernels/friction.hpp); the shear force of each (node, face) pair
 // is kept between steps and across rebuilds. Forces go to the force kernel's scatter view.
-// The law of one pair (contact_pair) is in kernels/contact/contact_pair.hpp.
+// The law of one pair (contact_pair) is in kernels/contact/contact_pair.hpp. How the points go to
+// threads is here too, since it shapes the pass: ranges of equal work on host threads
+// (BalancedPoints), teams of 32 sharing the gaps of a point with many candidates on GPUs
+// (ContactTeamPoints), the seeds' own kernel (PointSeeds), and the candidates' spread that
+// summary.json reports. One file: the pass and its launches change together.
 #include "kernels/contact/broad_phase.hpp"
 #include "kernels/contact/contact_pair.hpp"
 #include "kernels/contact/surfaces.hpp"
