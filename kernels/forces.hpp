@@ -17,7 +17,7 @@ constexpr int kChunk =
 // Arguments and results by value of the interface kernel's out-of-line branches
 // (LeanInterfaceForces::fail and friction_step).
 template <int D>
-struct FrictionVec {
+struct VecArg {
   double v[D];
 };
 template <int D>
@@ -130,7 +130,7 @@ struct LeanInterfaceForces {
   // and the step's motion of the node pair, and stores the slip state; it returns the increments
   // of the forces and of dU/dn (the same arithmetic: the caller adds f to fa, takes it from fb
   // and adds dg to g) and the fracture dissipation.
-  KOKKOS_FUNCTION FDEM_NOINLINE FrictionStep<D> friction_step(const int q, const int k, const FrictionVec<D> n,
+  KOKKOS_FUNCTION FDEM_NOINLINE FrictionStep<D> friction_step(const int q, const int k, const VecArg<D> n,
                                                               const double dn, const double ap, const double tc,
                                                               const double dD, const bool fresh,
                                                               const double wd) const {
@@ -159,7 +159,7 @@ struct LeanInterfaceForces {
     KOKKOS_INLINE_FUNCTION void friction(const CohesiveParams&, const double (&n)[D], const double (&)[D], double dn,
                                          const double (&)[D], double ap, double tc, double dD, bool fresh,
                                          CohesivePoint& h, double (&fa)[D], double (&fb)[D], double (&g)[D]) {
-      FrictionVec<D> nv;
+      VecArg<D> nv;
       for (int i = 0; i < D; ++i) nv.v[i] = n[i];
       const FrictionStep<D> r = f.friction_step(q, k, nv, dn, ap, tc, dD, fresh, h.wd);
       for (int i = 0; i < D; ++i) {
@@ -176,7 +176,7 @@ struct LeanInterfaceForces {
   // contact, carries nothing from now on). Not inlined: a rare branch, so that on CUDA the
   // registers of its points' updates do not add to those of the common path (docs/cuda.md,
   // "Kernel resources").
-  KOKKOS_FUNCTION FDEM_NOINLINE void fail(const int q, const FrictionVec<D> n) const {
+  KOKKOS_FUNCTION FDEM_NOINLINE void fail(const int q, const VecArg<D> n) const {
     for (int k = 0; k < D; ++k) {
       const CohesiveParams p = PerIface ? in.params(q) : in.coh;
       const bool slips = Fric && p.tanphir >= 0.0;
@@ -205,7 +205,7 @@ struct LeanInterfaceForces {
       apart = interface_apart<D>(xa, xb, dmg);
     }
     if (apart) {
-      FrictionVec<D> nv;
+      VecArg<D> nv;
       for (int i = 0; i < D; ++i) nv.v[i] = n[i];
       fail(q, nv);
       return;

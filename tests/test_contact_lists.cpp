@@ -152,6 +152,21 @@ TEST(ContactLists, HandoverBeyondTheSkinRebuilds) {
   EXPECT_EQ(ct->stale_passes(), 0);
 }
 
+// The cracked block pressed by its platen with every other interface failed and handed over, shaken,
+// 150 steps (a sample every 25): the scene of the narrow phase's comparisons below. setup(contact)
+// sets the contact system's options first.
+template <int D, class Setup>
+std::unique_ptr<Simulation<D>> pressed_cracked_run(const HostMesh& mesh, double skin, const Setup& setup) {
+  auto sim = std::make_unique<Simulation<D>>(pressed_case<D>(skin), mesh);
+  ContactSystem<D>* ct = sim->contact();
+  setup(*ct);
+  fail_interfaces(*sim, [](int q) { return q % 2 == 0; });
+  ct->check_failures(sim->m);
+  fdem_test::shake(*sim, 0.2);
+  for (int s = 0; s < 150; ++s) sim->step(s % 25 == 0);
+  return sim;
+}
+
 // The narrow phase visits only the pairs that can matter (kernels/contact/narrow_phase.hpp,
 // PairSubset): so a skin 400 times smaller (many rebuilds, a fraction of the candidates) and
 // subsets that overflow (1 pair per node, then all candidates) must give the same run, bit for
@@ -160,14 +175,7 @@ template <int D>
 void narrow_phase_exact_test() {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
   auto run = [&](double skin, bool small) {
-    auto sim = std::make_unique<Simulation<D>>(pressed_case<D>(skin), mesh);
-    ContactSystem<D>* ct = sim->contact();
-    ct->small_subsets = small;
-    fail_interfaces(*sim, [](int q) { return q % 2 == 0; });
-    ct->check_failures(sim->m);
-    fdem_test::shake(*sim, 0.2);
-    for (int s = 0; s < 150; ++s) sim->step(s % 25 == 0);
-    return sim;
+    return pressed_cracked_run<D>(mesh, skin, [&](ContactSystem<D>& ct) { ct.small_subsets = small; });
   };
   const auto ref = run(0.004, false), fine = run(1e-5, false), over = run(0.004, true);
   const ContactSystem<D>& c0 = *ref->contact();
@@ -218,14 +226,7 @@ template <int D>
 void narrow_phase_teams_test() {
   const HostMesh mesh = cracked_block<D>(D == 2 ? 6 : 3);
   auto run = [&](int above) {
-    auto sim = std::make_unique<Simulation<D>>(pressed_case<D>(0.004), mesh);
-    ContactSystem<D>* ct = sim->contact();
-    ct->team_above = above;
-    fail_interfaces(*sim, [](int q) { return q % 2 == 0; });
-    ct->check_failures(sim->m);
-    fdem_test::shake(*sim, 0.2);
-    for (int s = 0; s < 150; ++s) sim->step(s % 25 == 0);
-    return sim;
+    return pressed_cracked_run<D>(mesh, 0.004, [&](ContactSystem<D>& ct) { ct.team_above = above; });
   };
   const auto ref = run(0), teams = run(1);
   const ContactSystem<D>& c0 = *ref->contact();

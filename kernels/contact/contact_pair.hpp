@@ -77,11 +77,7 @@ KOKKOS_INLINE_FUNCTION void contact_open(const ContactLaw& L, const Kokkos::View
 // seed: a shear force added to the spring's before the step (where seed.on(); seed[k] its
 // components), the pair's share of an interface handed over at this poll (HandoverSeed,
 // kernels/contact/narrow_phase.hpp); the energy the spring then stores beyond its own is booked
-// against the seed's (the caller releases the seed's energy). NoSeed: none.
-struct NoSeed {
-  KOKKOS_INLINE_FUNCTION bool on() const { return false; }
-  KOKKOS_INLINE_FUNCTION double operator[](int) const { return 0.0; }
-};
+// against the seed's (the caller releases the seed's energy).
 template <int D, bool Fric = true, class Force, class SeedForce>
 KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const ContactLaw& L,
                                          const Kokkos::View<double* [D]>& v,
