@@ -24,6 +24,12 @@ struct PlatenDev {
   double tc;            // time of the velocity change
   double kn, ks;        // Pa/m, times the node's contact area
   double mu, coh;       // friction coefficient, cohesion (Pa)
+  // A platen with a mass (platens[i].mass: a guided drop weight) moves along n as the body's force
+  // and gravity drive it: inv_mass > 0, its travel along n and its speed along n are state
+  // (Model::platen_motion), its velocity across n stays vt; shift and mean_velocity do not apply.
+  double inv_mass = 0;        // 1 / kg; 0: the prescribed motion above
+  double vt[3] = {0, 0, 0};   // driven: the velocity across n (m/s)
+  double gn = 0;              // driven: gravity along n (m/s^2)
 
   // Displacement of the plane from p0, component k, at time t.
   KOKKOS_INLINE_FUNCTION double shift(const int k, const double t) const {
@@ -41,6 +47,27 @@ struct PlatenSet {
   int count = 0;
   PlatenDev p[kMaxPlatens];
 };
+// The columns of Model::platen_motion (a driven platen's state, the same on every process): its
+// travel along n from p0 + vt t, and its speed along n over the last half step (leap-frog, as the
+// nodes' velocities: v(n - 1/2) from the node update of one step to that of the next); and, for the
+// output, the travel and the speed at the time of the last step's forces (x(n), where the ledger
+// takes the nodes' momentum as the mean of v(n - 1/2) and v(n + 1/2)).
+constexpr int kPlatenTravel = 0, kPlatenSpeed = 1, kPlatenTravelAtForces = 2, kPlatenSpeedAtForces = 3;
+constexpr int kPlatenMotion = 4;
+
+// Platen p's displacement from p0, component k, at time t: the prescribed motion, or a driven
+// platen's state (valid at the time of the nodes' positions only).
+template <class MotionView>
+KOKKOS_INLINE_FUNCTION double platen_shift(const PlatenDev& P, const MotionView& motion, int p, int k, double t) {
+  return P.inv_mass > 0 ? P.vt[k] * t + motion(p, kPlatenTravel) * P.n[k] : P.shift(k, t);
+}
+// Its mean velocity over [t0, t0 + h]; a driven platen: its velocity over the half step stored
+// (before the node update the one before t, after it the one after t).
+template <class MotionView>
+KOKKOS_INLINE_FUNCTION double platen_velocity(const PlatenDev& P, const MotionView& motion, int p, int k, double t0,
+                                              double h) {
+  return P.inv_mass > 0 ? P.vt[k] + motion(p, kPlatenSpeed) * P.n[k] : P.mean_velocity(k, t0, h);
+}
 // Per-platen accumulators (device), the columns of Model::platen_acc: force on the body this step
 // (kPlatenForce + 0..2), cumulative work done by the platen, cumulative friction dissipation,
 // contacts this step.
@@ -165,6 +192,7 @@ struct PlatenData {
   Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, node)
   Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, node)
   Kokkos::View<double* [kPlatenAcc]> platen_acc;
+  Kokkos::View<double* [kPlatenMotion]> platen_motion;  // driven platens' travel, speed (kPlatenTravel)
 };
 
 template <int D>

@@ -17,17 +17,18 @@ struct PlatenKernel {
   Kokkos::View<double** [D]> fs;
   Kokkos::View<double**> g0;
   Kokkos::View<double* [kPlatenAcc]> acc;
+  Kokkos::View<double* [kPlatenMotion]> motion;
   double t, dt;
 
   // Node i (platen area A) against platen p.
   KOKKOS_INLINE_FUNCTION void contact(const int p, const int i, const double A) const {
     const PlatenDev& P = ps.p[p];
     double g = 0;
-    for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + P.shift(k, t))) * P.n[k];
+    for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, t))) * P.n[k];
     // relative displacement increment over the last step
     double du[D], dun = 0;
     for (int k = 0; k < D; ++k) {
-      du[k] = (v(i, k) - P.mean_velocity(k, t - dt, dt)) * dt;
+      du[k] = (v(i, k) - platen_velocity(P, motion, p, k, t - dt, dt)) * dt;
       dun += du[k] * P.n[k];
     }
     // The shear spring follows the Coulomb law shared with contact (kernels/friction.hpp); a
@@ -63,7 +64,8 @@ struct PlatenKernel {
       Kokkos::atomic_add(&acc(p, kPlatenForce + k), Fk);
       work += Fk * P.mean_velocity(k, t - 0.5 * dt, dt) * dt;  // centred on x(t)
     }
-    Kokkos::atomic_add(&acc(p, kPlatenWork), work);
+    // (a driven platen's work needs its velocity after t: advance_platens books it)
+    if (P.inv_mass == 0.0) Kokkos::atomic_add(&acc(p, kPlatenWork), work);
     Kokkos::atomic_add(&acc(p, kPlatenContacts), 1.0);
   }
 
@@ -86,9 +88,46 @@ void apply_platens(const Model<D>& m, double t, double dt) {
         acc(p, kPlatenForce + 0) = 0; acc(p, kPlatenForce + 1) = 0; acc(p, kPlatenForce + 2) = 0;
         acc(p, kPlatenContacts) = 0;
       });
-  const PlatenKernel<D> kernel{m.platens, m.x,         m.v,         m.f,          m.bnode, m.barea,
-                               m.platen_fs, m.platen_g0, m.platen_acc, t,          dt};
+  const PlatenKernel<D> kernel{m.platens,    m.x,         m.v,           m.f, m.bnode, m.barea, m.platen_fs,
+                               m.platen_g0, m.platen_acc, m.platen_motion, t,   dt};
   Kokkos::parallel_for("fdem::platens", Kokkos::RangePolicy<ExecSpace>(0, m.nb), kernel);
+}
+
+// The platens' total force on the body this step (summed over the processes of a decomposed run;
+// `given` 0: one process, the accumulators hold it).
+struct PlatenTotals {
+  int given = 0;
+  double F[kMaxPlatens][3] = {};
+};
+
+// The driven platens' step, after the node update (the leap-frog of the nodes, kernels/nodes.hpp):
+// the speed along n over [t, t + dt] from the speed over [t - dt, t], the reaction to the total
+// force on the body and gravity; the travel to t + dt; and the work of the own nodes' forces of this
+// step at the mean of the two speeds (centred on x(t), as a prescribed platen's work), so that the
+// work done on the body is the platen's loss of kinetic energy 0.5 M v(n - 1/2) v(n + 1/2).
+// dtv: the step of the velocities (the nodes' own: the mean of the two steps at a change of dt).
+template <int D>
+void advance_platens(const Model<D>& m, const PlatenTotals& totals, double dt, double dtv) {
+  if (m.platens.count == 0) return;
+  const auto ps = m.platens;
+  auto acc = m.platen_acc;
+  auto motion = m.platen_motion;
+  Kokkos::parallel_for(
+      "fdem::platens::advance", Kokkos::RangePolicy<ExecSpace>(0, ps.count), KOKKOS_LAMBDA(const int p) {
+        const PlatenDev& P = ps.p[p];
+        if (!(P.inv_mass > 0)) return;
+        double Fn = 0;  // the total force on the body along n
+        for (int k = 0; k < D; ++k) Fn += (totals.given ? totals.F[p][k] : acc(p, kPlatenForce + k)) * P.n[k];
+        const double v0 = motion(p, kPlatenSpeed);
+        const double v1 = v0 + dtv * (P.gn - Fn * P.inv_mass);
+        double work = 0;
+        for (int k = 0; k < D; ++k) work += acc(p, kPlatenForce + k) * (P.vt[k] + 0.5 * (v0 + v1) * P.n[k]);
+        acc(p, kPlatenWork) += work * dtv;
+        motion(p, kPlatenTravelAtForces) = motion(p, kPlatenTravel);
+        motion(p, kPlatenSpeedAtForces) = 0.5 * (v0 + v1);
+        motion(p, kPlatenSpeed) = v1;
+        motion(p, kPlatenTravel) += v1 * dt;
+      });
 }
 
 // Elastic energy stored in the platen springs (normal and shear).
@@ -101,6 +140,7 @@ double platen_energy(const Model<D>& m, double t) {
   auto barea = m.barea;
   auto fs = m.platen_fs;
   auto g0 = m.platen_g0;
+  auto motion = m.platen_motion;
   double e = 0;
   Kokkos::parallel_reduce(
       "fdem::platen_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nb),
@@ -111,7 +151,7 @@ double platen_energy(const Model<D>& m, double t) {
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
-            g += (x(i, k) - (P.p0[k] + P.shift(k, t))) * P.n[k];
+            g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, t))) * P.n[k];
             f2 += fs(p, i, k) * fs(p, i, k);
           }
           g -= g0(p, i);
@@ -138,6 +178,7 @@ void grow_platen_areas(const Model<D>& m, const Kokkos::View<double*>& narea, in
   auto fs = m.platen_fs;
   auto g0 = m.platen_g0;
   auto acc = m.platen_acc;
+  auto motion = m.platen_motion;
   const auto ps = m.platens;
   const double tn = t;
   Kokkos::parallel_for(
@@ -149,7 +190,7 @@ void grow_platen_areas(const Model<D>& m, const Kokkos::View<double*>& narea, in
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
-            g += (x(i, k) - (P.p0[k] + P.shift(k, tn))) * P.n[k];
+            g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, tn))) * P.n[k];
             f2 += fs(p, i, k) * fs(p, i, k);
           }
           const double ge = g - g0(p, i);

@@ -96,6 +96,9 @@ struct PlatenSpec {
   double kn = 0, ks = 0;   // Pa/m (per unit contact area); 0: derive (resolve_defaults)
   double friction = 0;     // Coulomb coefficient
   double cohesion = 0;     // Pa
+  // kg (2D: of the body's thickness); > 0: the platen moves along its normal under the body's
+  // force and gravity from `velocity` on (a guided drop weight); 0: its motion is prescribed
+  double mass = 0;
 };
 
 // Contact between deformable bodies (docs/theory.md section 6b): the outer boundaries of the bodies

@@ -164,7 +164,8 @@ void read_platens(json& doc, Case& c, const Reader& R) {
   json& pl = R.array(doc, "", "platens", false);
   for (size_t i = 0; i < pl.size(); ++i) {
     const std::string p = child("platens", i);
-    R.keys(pl[i], p, {"name", "point", "normal", "velocity", "change", "kn", "ks", "friction", "cohesion"});
+    R.keys(pl[i], p, {"name", "point", "normal", "velocity", "change", "kn", "ks", "friction", "cohesion",
+                        "mass"});
     PlatenSpec s;
     s.name = R.name(pl[i], p, "name");
     for (const auto& o : c.platens)
@@ -189,6 +190,10 @@ void read_platens(json& doc, Case& c, const Reader& R) {
     s.ks = R.number(pl[i], p, "ks", ge(0), 0.0);
     s.friction = R.number(pl[i], p, "friction", ge(0), 0.0);
     s.cohesion = R.number(pl[i], p, "cohesion", ge(0), 0.0);
+    s.mass = R.number(pl[i], p, "mass", ge(0), 0.0);
+    if (s.mass > 0 && s.has_change)
+      R.fail(child(p, "change"), "a platen with a mass moves as its mass and the forces on it decide: "
+                                 "'change' is for a platen without one (allowed: one of 'mass', 'change')");
     c.platens.push_back(s);
   }
 }

@@ -61,6 +61,18 @@ void boundary_areas(const HostMesh& mesh, Model<D>& m) {
   Kokkos::deep_copy(m.barea, ba_h);
 }
 
+// A platen with a mass (PlatenDev::inv_mass): the velocity across its normal and gravity along it.
+void drive(const PlatenSpec& ps, const Vec3& gravity, PlatenDev& P) {
+  P.inv_mass = ps.mass > 0 ? 1.0 / ps.mass : 0.0;
+  double vn = 0, gn = 0;
+  for (int k = 0; k < 3; ++k) {
+    vn += P.vel[k] * P.n[k];
+    gn += gravity[k] * P.n[k];
+  }
+  for (int k = 0; k < 3; ++k) P.vt[k] = ps.mass > 0 ? P.vel[k] - vn * P.n[k] : 0.0;
+  P.gn = ps.mass > 0 ? gn : 0.0;
+}
+
 // The platens (after boundary_areas) and their springs' storage; their names into `names`.
 // Returns the platen springs' stable step on the boundary nodes.
 template <int D>
@@ -90,11 +102,17 @@ double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, s
     P.ks = ps.ks;
     P.mu = ps.friction;
     P.coh = ps.cohesion;
+    drive(ps, c.gravity, P);
     names.push_back(ps.name);
+    double area = 0;  // (a part's own boundary: the platen's whole mass on it, a bound all the same)
     for (int bb = 0; bb < m.nb; ++bb) {
-      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) / mass[bn_h(bb)]);
+      // a node between its spring and a driven platen: the two masses in series
+      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) * (1.0 / mass[bn_h(bb)] + P.inv_mass));
       step = std::min(step, 2.0 / w);
+      area += ba_h(bn_h(bb));
     }
+    // a driven platen on the springs of the whole boundary at once
+    if (P.inv_mass > 0 && area > 0) step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * area * P.inv_mass));
   }
   m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
   m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
@@ -110,7 +128,7 @@ double surface_step(const Model<D>& m, const std::vector<double>& amax, const st
     const PlatenDev& P = m.platens.p[p];
     for (int i = 0; i < m.nn; ++i)
       if (amax[i] > 0 && mass[i] > 0)
-        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] / mass[i]));
+        step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] * (1.0 / mass[i] + P.inv_mass)));
   }
   return step;
 }
@@ -126,6 +144,34 @@ void Platens<D>::build(const Case& c, const HostMesh& mesh, const std::vector<do
   }
   m.platen_acc = Kokkos::View<double* [kPlatenAcc]>("fdem::platen_acc", std::max(1, m.platens.count));
   acc_host_ = Kokkos::create_mirror_view(m.platen_acc);
+  m.platen_motion = Kokkos::View<double* [kPlatenMotion]>("fdem::platen_motion", std::max(1, m.platens.count));
+  motion_host_ = Kokkos::create_mirror_view(m.platen_motion);
+  for (int p = 0; p < m.platens.count; ++p) {
+    const PlatenDev& P = m.platens.p[p];
+    driven_ = driven_ || P.inv_mass > 0;
+    driven_platen_.push_back(P.inv_mass > 0);
+    for (int k = 0; k < 3; ++k) motion_host_(p, kPlatenSpeed) += P.inv_mass > 0 ? P.vel[k] * P.n[k] : 0.0;
+    motion_host_(p, kPlatenSpeedAtForces) = motion_host_(p, kPlatenSpeed);
+  }
+  Kokkos::deep_copy(m.platen_motion, motion_host_);
+}
+
+template <int D>
+void Platens<D>::advance(const Model<D>& m, const Parts<D>& parts, double dt, double dtv) const {
+  if (!driven_) return;
+  PlatenTotals totals;
+  if (parts.size() > 1) {  // the total force: every part's own nodes' (one small copy and sum)
+    Kokkos::deep_copy(acc_host_, m.platen_acc);
+    std::vector<double> flat(static_cast<size_t>(m.platens.count) * 3);
+    for (int p = 0; p < m.platens.count; ++p)
+      for (int k = 0; k < 3; ++k) flat[static_cast<size_t>(p) * 3 + k] = acc_host_(p, kPlatenForce + k);
+    parts.sum(flat.data(), static_cast<int>(flat.size()));
+    totals.given = 1;
+    for (int p = 0; p < m.platens.count; ++p)
+      for (int k = 0; k < 3; ++k) totals.F[p][k] = flat[static_cast<size_t>(p) * 3 + k];
+  }
+  advance_platens<D>(m, totals, dt, dtv);
+  cached_at_ = -1;  // (the work and the motion have changed)
 }
 
 template <int D>
@@ -153,6 +199,7 @@ template <int D>
 void Platens<D>::copy_accumulators(const Model<D>& m, long stamp) const {
   if (cached_at_ == stamp) return;
   Kokkos::deep_copy(acc_host_, m.platen_acc);
+  if (driven_) Kokkos::deep_copy(motion_host_, m.platen_motion);
   cached_at_ = stamp;
 }
 
@@ -164,7 +211,7 @@ void Platens<D>::book(const Model<D>& m, double t, double dt, long stamp, double
   for (int p = 0; p < m.platens.count; ++p) {
     double inc = 0;
     for (int k = 0; k < 3; ++k)
-      inc += acc_host_(p, kPlatenForce + k) * m.platens.p[p].mean_velocity(k, t, 0.5 * dt) * dt;
+      inc += acc_host_(p, kPlatenForce + k) * platen_velocity(m.platens.p[p], motion_host_, p, k, t, 0.5 * dt) * dt;
     work += acc_host_(p, kPlatenWork) - 0.5 * inc;
     friction += acc_host_(p, kPlatenFriction);
   }
@@ -186,9 +233,18 @@ std::vector<std::array<double, 3>> Platens<D>::forces(const Model<D>& m, const P
 }
 
 template <int D>
-double Platens<D>::displacement(const PlatenDev& P, double at) {
+double Platens<D>::displacement(const Model<D>& m, int p, double at) const {
+  const PlatenDev& P = m.platens.p[p];
   double s2 = 0;
-  for (int k = 0; k < 3; ++k) s2 += P.shift(k, at) * P.shift(k, at);
+  if (P.inv_mass > 0) {  // its state at the last step's forces: `at` is their time
+    Kokkos::deep_copy(motion_host_, m.platen_motion);
+    for (int k = 0; k < 3; ++k) {
+      const double s = P.vt[k] * at + motion_host_(p, kPlatenTravelAtForces) * P.n[k];
+      s2 += s * s;
+    }
+  } else {
+    for (int k = 0; k < 3; ++k) s2 += P.shift(k, at) * P.shift(k, at);
+  }
   return std::sqrt(s2);
 }
 
@@ -199,6 +255,8 @@ void Platens<D>::add_columns(std::vector<std::string>& cols) const {
     for (int k = 0; k < D; ++k) cols.push_back(name + "_force_" + kAxes[k] + " [N]");
     cols.push_back(name + "_load [N]");
   }
+  for (size_t p = 0; p < names_.size(); ++p)  // a driven platen: its speed towards the body
+    if (driven_platen_[p]) cols.push_back(names_[p] + "_speed [m/s]");
 }
 
 template <int D>
@@ -207,10 +265,12 @@ void Platens<D>::append_row(const Model<D>& m, const std::vector<std::array<doub
   for (int p = 0; p < m.platens.count; ++p) {
     const auto& F = forces[p];
     const auto& P = m.platens.p[p];
-    row.push_back(displacement(P, t));
+    row.push_back(displacement(m, p, t));
     for (int k = 0; k < D; ++k) row.push_back(F[k]);
     row.push_back(load(P, F));
   }
+  for (int p = 0; p < m.platens.count; ++p)  // (displacement() has copied the motion)
+    if (driven_platen_[p]) row.push_back(motion_host_(p, kPlatenSpeedAtForces));
 }
 
 template class Platens<2>;

@@ -55,11 +55,18 @@ class Platens {
   static double load(const PlatenDev& P, const std::array<double, 3>& F) {
     return F[0] * P.n[0] + F[1] * P.n[1] + F[2] * P.n[2];
   }
-  // Its displacement along its velocity direction at time `at`.
-  static double displacement(const PlatenDev& P, double at);
+  // Platen p's displacement (the distance it has moved) at time `at`: for a driven platen (a mass)
+  // `at` is the time of the last step's forces (the history's rows and load samples).
+  double displacement(const Model<D>& m, int p, double at) const;
+  // After the node update: a driven platen's speed and travel from the total force on the body
+  // (summed over the processes), its work of this step (kernels/platens.hpp: advance_platens);
+  // dtv: the nodes' velocity step.
+  void advance(const Model<D>& m, const Parts<D>& parts, double dt, double dtv) const;
+  bool driven() const { return driven_; }
   const std::vector<std::string>& names() const { return names_; }
 
-  // history.csv: per platen its displacement, force components and load; and a row's values.
+  // history.csv: per platen its displacement, force components and load, then each driven platen's
+  // speed; and a row's values.
   void add_columns(std::vector<std::string>& cols) const;
   void append_row(const Model<D>& m, const std::vector<std::array<double, 3>>& forces, double t,
                   std::vector<double>& row) const;
@@ -71,14 +78,18 @@ class Platens {
     f.view("model/platen_g0", m.platen_g0);
     f.view("model/platen_area", m.barea, m.barea.extent(0) > 0);
     f.view("model/platen_acc", m.platen_acc);
+    f.view("model/platen_motion", m.platen_motion, driven_);  // (the same on every process)
     cached_at_ = -1;  // (loaded: the next forces() copies)
   }
 
  private:
   std::vector<std::string> names_;
+  bool driven_ = false;              // a platen with a mass
+  std::vector<bool> driven_platen_;  // per platen
   long surface_version_ = -1;  // contact surfaces the node list was taken from
   mutable long cached_at_ = -1;  // the stamp of acc_host_'s copy
   mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenAcc]>())) acc_host_;
+  mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenMotion]>())) motion_host_;
   void copy_accumulators(const Model<D>& m, long stamp) const;
 };
 

@@ -77,6 +77,7 @@ void Simulation<D>::step(bool sample) {
   Energies e = sample_energies(sample);
   lap(phase_times_.ledger);
   const NodeSums w = update_nodes_now(sample);
+  platens_.advance(m, parts_, dt, prm_.dtv);  // a driven platen moves with the nodes (none: nothing)
   lap(phase_times_.nodes);
   book_energies(e, w, sample);
   t += dt;

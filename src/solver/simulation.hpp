@@ -120,7 +120,7 @@ class Simulation {
   std::array<double, 3> platen_force(int p) const { return platen_forces()[p]; }
   // The same for every platen, with one copy from the device (none when the ledger took it).
   std::vector<std::array<double, 3>> platen_forces() const { return platens_.forces(m, parts_, step_count); }
-  double platen_displacement(int p, double at) const { return Platens<D>::displacement(m.platens.p[p], at); }
+  double platen_displacement(int p, double at) const { return platens_.displacement(m, p, at); }
   // Reaction force of velocity BC b (sum over its node set of minus the internal force), from the
   // forces of the last step (call before step() clears them: use sample_reactions()).
   const std::vector<std::array<double, 3>>& reactions() const { return loads_.reactions(); }
