@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 #include "common/error.hpp"
@@ -81,6 +82,50 @@ std::vector<std::string> fragment_columns() {
   for (int b = 0; b < kFragmentBins; ++b) fc.push_back("count_" + FragmentStats::bin_name(b));
   for (int b = 0; b < kFragmentBins; ++b) fc.push_back("mass_" + FragmentStats::bin_name(b));
   return fc;
+}
+
+// The ten largest fragments where their material was at the start: share of the mass, the
+// mass-weighted centroid and the box of their elements' centroids in the reference configuration
+// (a fracture pattern is read from these: halves split through an axis, caps, cones).
+// frag: each element's fragment id; masses: each fragment's.
+nlohmann::json largest_fragments(const std::vector<int>& frag, const std::vector<double>& masses,
+                                 const std::vector<double>& emass, const std::vector<double>& centroid, int dim) {
+  std::vector<int> order(masses.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  std::sort(order.begin(), order.end(), [&masses](int a, int b) { return masses[a] > masses[b]; });
+  if (order.size() > 10) order.resize(10);
+  std::vector<int> rank(masses.size(), -1);
+  for (size_t r = 0; r < order.size(); ++r) rank[order[r]] = static_cast<int>(r);
+  const size_t n = order.size(), d = static_cast<size_t>(dim);
+  std::vector<double> m(n, 0.0), c(n * d, 0.0), lo(n * d, std::numeric_limits<double>::infinity()),
+      hi(n * d, -std::numeric_limits<double>::infinity());
+  double total = 0;
+  for (size_t e = 0; e < frag.size(); ++e) {
+    total += emass[e];
+    const int r = frag[e] >= 0 ? rank[frag[e]] : -1;
+    if (r < 0) continue;
+    m[r] += emass[e];
+    for (size_t k = 0; k < d; ++k) {
+      const double x = centroid[e * d + k];
+      c[r * d + k] += emass[e] * x;
+      lo[r * d + k] = std::min(lo[r * d + k], x);
+      hi[r * d + k] = std::max(hi[r * d + k], x);
+    }
+  }
+  nlohmann::json out = nlohmann::json::array();
+  for (size_t r = 0; r < n; ++r) {
+    std::vector<double> cr(d), lr(d), hr(d);
+    for (size_t k = 0; k < d; ++k) {
+      cr[k] = m[r] > 0 ? c[r * d + k] / m[r] : 0.0;
+      lr[k] = lo[r * d + k];
+      hr[k] = hi[r * d + k];
+    }
+    out.push_back({{"fraction", total > 0 ? m[r] / total : 0.0},
+                   {"reference_centroid", cr},
+                   {"reference_box_min", lr},
+                   {"reference_box_max", hr}});
+  }
+  return out;
 }
 }  // namespace
 
@@ -211,6 +256,11 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
     at_least.push_back(x);
     held.push_back(fs.total_mass > 0 ? sum / fs.total_mass : 0.0);
   }
+  std::vector<int> frag;
+  element_ids(sim, frag);
+  std::vector<double> emass, centroid;
+  element_mass_centroids<D>(whole_ ? *whole_ : sim.m, emass, centroid);
+  const nlohmann::json largest = largest_fragments(frag, analysis_->masses(), emass, centroid, D);
   nlohmann::json pb = per_body(sim);
   nlohmann::json out = {
       {"count", fs.count},
@@ -219,6 +269,7 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
       {"total_mass_kg", fs.total_mass},
       {"single_element_fragments", fs.single_element},
       {"largest_fractions", top},
+      {"largest", largest},
       {"distribution",
        {{"bin_lower_edge", edges},
         {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
