@@ -212,22 +212,40 @@ def draw_fragments_3d(ax, X, x, elems, ids, colours, keep):
 
 
 def read_platens(out):
-    """Platens of the run (from the resolved case.json): (point at t = 0, unit normal, velocity)."""
+    """Platens of the run (from the resolved case.json): (point at t = 0, unit normal, shift), with
+    shift(t) the plane's displacement from the point: v t for a prescribed platen (its `change`
+    included), and for a platen with a mass its velocity across the normal times t plus the
+    integral of history.csv's `<name>_speed [m/s]` along the normal."""
     try:
         with open(os.path.join(out, "case.json")) as f:
             case = json.load(f)
     except (OSError, ValueError):
         return []
+    hh, hd = read_csv(os.path.join(out, "history.csv"))
     res = []
     for p in case.get("platens", []):
         n = np.array(p["normal"], float)
-        res.append((np.array(p["point"], float), n / np.linalg.norm(n), np.array(p.get("velocity", [0] * len(n)), float)))
+        n /= np.linalg.norm(n)
+        v = np.array(p.get("velocity", [0] * len(n)), float)
+        speed = p.get("name", "") + "_speed [m/s]"
+        if p.get("mass", 0) > 0 and speed in hh:
+            t, s = col(hh, hd, "time [s]"), col(hh, hd, speed)
+            travel = np.concatenate([[0.0], np.cumsum(0.5 * (s[1:] + s[:-1]) * np.diff(t))])
+            vt = v - np.dot(v, n) * n
+            res.append((np.array(p["point"], float), n, lambda tt, t=t, a=travel, vt=vt, n=n: vt * tt + np.interp(tt, t, a) * n))
+            continue
+        ch = p.get("change")
+        if ch:
+            tc, v2 = float(ch["time"]), np.array(ch["velocity"], float)
+            res.append((np.array(p["point"], float), n, lambda tt, v=v, tc=tc, v2=v2: v * tt if tt <= tc else v * tc + v2 * (tt - tc)))
+        else:
+            res.append((np.array(p["point"], float), n, lambda tt, v=v: v * tt))
     return res
 
 
 def draw_platens_2d(ax, platens, t, lo, hi):
-    for p0, n, v in platens:
-        c = p0 + v * t
+    for p0, n, shift in platens:
+        c = p0 + shift(t)
         tang = np.array([-n[1], n[0]])
         s = np.linalg.norm(hi - lo)
         a, b = c - s * tang, c + s * tang
@@ -239,8 +257,8 @@ def draw_platens_2d(ax, platens, t, lo, hi):
 def draw_platens_3d(ax, platens, t, centre, r):
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    for p0, n, v in platens:
-        c0 = p0 + v * t
+    for p0, n, shift in platens:
+        c0 = p0 + shift(t)
         c = centre - np.dot(centre - c0, n) * n  # the body's centre projected on the plane
         a = np.cross(n, [1.0, 0, 0] if abs(n[0]) < 0.9 else [0, 1.0, 0])
         a /= np.linalg.norm(a)
