@@ -73,10 +73,15 @@ void drive(const PlatenSpec& ps, const Vec3& gravity, PlatenDev& P) {
   P.gn = ps.mass > 0 ? gn : 0.0;
 }
 
-// The platens (after boundary_areas) and their springs' storage; their names into `names`.
-// Returns the platen springs' stable step on the boundary nodes.
+// A driven platen (inverse mass w) on springs of stiffness kA in all: its stable step.
+double weight_step(double kA, double w) { return kA > 0 && w > 0 ? 2.0 / std::sqrt(kA * w) : std::numeric_limits<double>::infinity(); }
+
+// The platens (after boundary_areas) and their springs' storage; their names into `names`, each
+// platen's spring stiffness on the boundary nodes at once into `kA`. Returns the platen springs'
+// stable step on the boundary nodes.
 template <int D>
-double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, std::vector<std::string>& names) {
+double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, std::vector<std::string>& names,
+                  std::vector<double>& kA) {
   if (static_cast<int>(c.platens.size()) > kMaxPlatens)
     throw InputError(c.file + ": platens: at most " + std::to_string(kMaxPlatens) + " allowed");
   auto bn_h = Kokkos::create_mirror_view(m.bnode);
@@ -104,15 +109,17 @@ double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, s
     P.coh = ps.cohesion;
     drive(ps, c.gravity, P);
     names.push_back(ps.name);
-    double area = 0;  // (a part's own boundary: the platen's whole mass on it, a bound all the same)
+    double area = 0;
     for (int bb = 0; bb < m.nb; ++bb) {
       // a node between its spring and a driven platen: the two masses in series
       const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) * (1.0 / mass[bn_h(bb)] + P.inv_mass));
       step = std::min(step, 2.0 / w);
       area += ba_h(bn_h(bb));
     }
-    // a driven platen on the springs of the whole boundary at once
-    if (P.inv_mass > 0 && area > 0) step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * area * P.inv_mass));
+    // a driven platen on the springs of the whole boundary at once (a part of a decomposed run:
+    // its own share, summed over the parts by Platens::weight_steps)
+    kA.push_back(std::max(P.kn, P.ks) * area);
+    step = std::min(step, weight_step(kA.back(), P.inv_mass));
   }
   m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
   m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
@@ -120,15 +127,23 @@ double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, s
 }
 
 // With contact: the platen springs' stable step on every potential surface node at its largest
-// contact area amax.
+// contact area amax (a part's own nodes, owned >= 0: its own), and each platen's springs on all of
+// them at once into kA.
 template <int D>
-double surface_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass) {
+double surface_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
+                    std::vector<double>& kA) {
   double step = std::numeric_limits<double>::infinity();
+  kA.assign(m.platens.count, 0.0);
   for (int p = 0; p < m.platens.count; ++p) {
     const PlatenDev& P = m.platens.p[p];
+    double area = 0;
     for (int i = 0; i < m.nn; ++i)
-      if (amax[i] > 0 && mass[i] > 0)
+      if (amax[i] > 0 && mass[i] > 0) {
         step = std::min(step, 2.0 / std::sqrt(std::max(P.kn, P.ks) * amax[i] * (1.0 / mass[i] + P.inv_mass)));
+        if (i < m.owned_nodes()) area += amax[i];
+      }
+    kA[p] = std::max(P.kn, P.ks) * area;
+    step = std::min(step, weight_step(kA[p], P.inv_mass));
   }
   return step;
 }
@@ -140,7 +155,7 @@ void Platens<D>::build(const Case& c, const HostMesh& mesh, const std::vector<do
                        StepContributions& sc) {
   if (!c.platens.empty()) {
     boundary_areas<D>(mesh, m);
-    sc.platens = platens_of<D>(c, mass, m, names_);
+    sc.platens = platens_of<D>(c, mass, m, names_, weight_kA_);
   }
   m.platen_acc = Kokkos::View<double* [kPlatenAcc]>("fdem::platen_acc", std::max(1, m.platens.count));
   acc_host_ = Kokkos::create_mirror_view(m.platen_acc);
@@ -176,8 +191,22 @@ void Platens<D>::advance(const Model<D>& m, const Parts<D>& parts, double dt, do
 
 template <int D>
 void Platens<D>::contact_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
-                              StepContributions& sc) const {
-  sc.platens_on_surfaces = surface_step<D>(m, amax, mass);
+                              StepContributions& sc) {
+  sc.platens_on_surfaces = surface_step<D>(m, amax, mass, weight_kA_surfaces_);
+}
+
+template <int D>
+void Platens<D>::weight_steps(const Parts<D>& parts, const Model<D>& m, StepContributions& sc) const {
+  if (!driven_) return;
+  std::vector<double> kA = weight_kA_;
+  kA.insert(kA.end(), weight_kA_surfaces_.begin(), weight_kA_surfaces_.end());
+  kA.resize(2 * static_cast<size_t>(m.platens.count), 0.0);
+  parts.sum(kA.data(), static_cast<int>(kA.size()));
+  for (int p = 0; p < m.platens.count; ++p) {
+    sc.platens = std::min(sc.platens, weight_step(kA[p], m.platens.p[p].inv_mass));
+    if (sc.has_contact)
+      sc.platens_on_surfaces = std::min(sc.platens_on_surfaces, weight_step(kA[m.platens.count + p], m.platens.p[p].inv_mass));
+  }
 }
 
 template <int D>

@@ -32,10 +32,13 @@ class Platens {
   // With contact: the springs' stable step on every potential surface node at its largest contact
   // area (ContactSystem::potential_area) into sc.platens_on_surfaces.
   void contact_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
-                    StepContributions& sc) const;
+                    StepContributions& sc);
   // With contact: the platens act on the contact system's own surface nodes with their areas (on
   // the first call and whenever the surfaces have changed since the last).
   void follow_surfaces(Model<D>& m, const ContactSystem<D>& contact, double t);
+  // A decomposed run: a driven platen's stable step on the springs of the whole body at once (each
+  // part's own share of them summed over the parts) into sc.platens and sc.platens_on_surfaces.
+  void weight_steps(const Parts<D>& parts, const Model<D>& m, StepContributions& sc) const;
   bool surfaces_changed(const ContactSystem<D>& contact) const;
 
   // The step's call: the springs' forces into m.f and the accumulators (kernels/platens.hpp).
@@ -85,6 +88,9 @@ class Platens {
  private:
   std::vector<std::string> names_;
   bool driven_ = false;              // a platen with a mass
+  // per platen: the spring stiffness of all its own boundary nodes, of all its own potential
+  // surface nodes at their largest areas (N/m; its stable step as a driven platen: weight_steps)
+  std::vector<double> weight_kA_, weight_kA_surfaces_;
   std::vector<bool> driven_platen_;  // per platen
   long surface_version_ = -1;  // contact surfaces the node list was taken from
   mutable long cached_at_ = -1;  // the stamp of acc_host_'s copy

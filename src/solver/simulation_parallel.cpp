@@ -35,6 +35,7 @@ void Simulation<D>::set_decomposition(std::shared_ptr<const Comm> comm, const Su
   for (int i = 0; i < kSmallestOverPartsCount; ++i) v[i] = all.*kSmallestOverParts[i];
   parts_.min(v, kSmallestOverPartsCount);
   for (int i = 0; i < kSmallestOverPartsCount; ++i) all.*kSmallestOverParts[i] = v[i];
+  platens_.weight_steps(parts_, m, all);  // (a drop weight on the whole body's springs)
   all.bulk_element = -1;
   if (contact_) {  // surfaces may meet on some process: on all (one time step)
     agree_on_meeting();
