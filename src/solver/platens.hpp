@@ -65,7 +65,6 @@ class Platens {
   // (summed over the processes), its work of this step (kernels/platens.hpp: advance_platens);
   // dtv: the nodes' velocity step.
   void advance(const Model<D>& m, const Parts<D>& parts, double dt, double dtv) const;
-  bool driven() const { return driven_; }
   const std::vector<std::string>& names() const { return names_; }
 
   // history.csv: per platen its displacement, force components and load, then each driven platen's

@@ -261,7 +261,7 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
   std::vector<double> emass, centroid;
   element_mass_centroids<D>(whole_ ? *whole_ : sim.m, emass, centroid);
   const nlohmann::json largest = largest_fragments(frag, analysis_->masses(), emass, centroid, D);
-  nlohmann::json pb = per_body(sim);
+  nlohmann::json pb = per_body(frag, emass, centroid);
   nlohmann::json out = {
       {"count", fs.count},
       {"largest_fraction", fs.largest_fraction},
@@ -280,12 +280,9 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
 }
 
 template <int D>
-nlohmann::json RunFragments<D>::per_body(const Simulation<D>& sim) {
+nlohmann::json RunFragments<D>::per_body(const std::vector<int>& frag, const std::vector<double>& emass,
+                                         const std::vector<double>& centroid) {
   if (bodies_ < 2 || !analysis_) return nullptr;  // (over several processes: process 0's)
-  std::vector<int> frag;
-  element_ids(sim, frag);
-  std::vector<double> emass, centroid;
-  element_mass_centroids<D>(whole_ ? *whole_ : sim.m, emass, centroid);
   const auto b = body_fragments(body_, bodies_, frag, analysis_->masses(), emass, centroid);
   write_bodies_csv(out_ + "/bodies.csv", b, D);
   return body_fragments_summary(b, out_ + "/bodies.csv");

@@ -66,8 +66,10 @@ class RunFragments {
                const RunState* restart = nullptr, const std::string& file = "");
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
-  // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null).
-  nlohmann::json per_body(const Simulation<D>& sim);
+  // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null);
+  // from each element's fragment id, mass and reference centroid (summary() takes them once).
+  nlohmann::json per_body(const std::vector<int>& frag, const std::vector<double>& emass,
+                          const std::vector<double>& centroid);
   // The row of the instant `e` of the last history row (the present state).
   void write_row(const Simulation<D>& sim, const Energies& e);
   void element_ids(const Simulation<D>& sim, std::vector<int>& ids);
