@@ -161,3 +161,27 @@ TEST(Refuse, CheckpointIntervalIsCheckedWithCleanMessages) {
 }
 
 }  // namespace
+
+// mesh.refine (src/mesh/refine.hpp): out of [0, 10] or not an integer refused naming the key;
+// a refinement too large for the memory refused before Gmsh meshes, with the refined estimate.
+TEST(Refuse, RefineOutOfRangeOrTooLargeIsRefusedBeforeMeshing) {
+  const std::string disc = kSrc + "/cases/brazilian_disc/case.json";
+  Result r = fdem("check " + disc + " --set mesh.refine=-1");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_TRUE(has(r, "mesh.refine: value -1 is out of range (allowed: integer 0 to 10)")) << r.out;
+  r = fdem("check " + disc + " --set mesh.refine=1.5");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_TRUE(has(r, "mesh.refine: expected an integer")) << r.out;
+  // 2342 triangles at 3 mm (Gmsh's estimate 2.36e3) x 4^8 = 1.5e8: no Gmsh run, the estimate named
+  r = fdem("check " + disc + " --set mesh.refine=8");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_TRUE(has(r, "(disc of radius 0.05 m, refined 8 times) would make about 1.5")) << r.out;
+  EXPECT_FALSE(has(r, "Gmsh")) << r.out;
+  // a block generator: its 3200 triangles x 4^2 do not fit in 10 MiB
+  r = fdem("check " + kU + " --set mesh.refine=2", "FDEM_MEMORY_LIMIT_GB=0.01");
+  EXPECT_EQ(r.rc, 2) << r.out;
+  EXPECT_TRUE(has(r, "5.12e+04 elements")) << r.out;
+  r = fdem("check " + kU + " --set mesh.refine=1");
+  EXPECT_EQ(r.rc, 0) << r.out;
+  EXPECT_TRUE(has(r, "\"elements\": 12800")) << r.out;
+}

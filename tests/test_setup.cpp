@@ -204,3 +204,32 @@ TEST(Setup, SphereMesherHxt) {
 }
 
 }  // namespace
+
+// mesh.refine: the refinement is a phase of its own, after Gmsh's coarse mesh; the run's counts
+// are the coarse mesh's times 8 (interfaces: every face of the fine mesh inside the sphere).
+TEST(Setup, RefinementIsAPhaseAndMultipliesTheElements) {
+  const std::string out = (fs::temp_directory_path() / ("fdem_setup_refine_" + std::to_string(::getpid()))).string();
+  auto run = [&](const std::string& sets) {
+    fs::remove_all(out);
+    const std::string cmd = std::string(FDEM_BINARY) + " run " + FDEM_SOURCE_DIR +
+                            "/cases/particle_impact_3d/case.json --out " + out +
+                            " --set parameters.h=0.008 --set time.max_steps=2 --set output.snapshot_count=0 " +
+                            sets + " > " + out + ".log 2>&1";
+    const int rc = std::system(cmd.c_str());
+    EXPECT_TRUE(WIFEXITED(rc) && WEXITSTATUS(rc) == 0) << slurp(out + ".log");
+    return nlohmann::json::parse(slurp(out + "/summary.json"));
+  };
+  const auto coarse = run("");
+  const auto fine = run("--set mesh.refine=1");
+  const double ne = coarse.at("counts").at("elements").get<double>();
+  EXPECT_EQ(fine.at("counts").at("elements").get<double>(), 8 * ne);
+  // interior faces: (4 x 8 ne - boundary faces) / 2, the boundary's faces 4 times the coarse's
+  const double bf = 4 * ne - 2 * coarse.at("counts").at("interfaces").get<double>();
+  EXPECT_EQ(fine.at("counts").at("interfaces").get<double>(), (32 * ne - 4 * bf) / 2);
+  int phases = 0;
+  for (const auto& p : fine.at("setup").at("phases")) phases += p.at("name") == "refinement";
+  EXPECT_EQ(phases, 1);
+  for (const auto& p : coarse.at("setup").at("phases")) EXPECT_NE(p.at("name"), "refinement");
+  fs::remove_all(out);
+  fs::remove(out + ".log");
+}

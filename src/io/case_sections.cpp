@@ -312,7 +312,8 @@ void read_fracture(json& doc, Case& c, const Reader& R) {
   if (f.contains("scatter")) read_scatter(f, c, R);
 }
 
-// "mesh.rotation": {"angle_deg", "axis" (3D), "center"} and "mesh.jitter": {"amplitude", "seed"}:
+// "mesh.rotation": {"angle_deg", "axis" (3D), "center"}, "mesh.jitter": {"amplitude", "seed"} and
+// "mesh.refine" (levels):
 // what any mesh (file or generator) may take (src/mesh/mesh_transforms.cpp). Nothing is written
 // for a key that is absent (the same case hash as before).
 void read_mesh_transforms(json& m, MeshSpec& s, int d, const Reader& R) {
@@ -341,6 +342,8 @@ void read_mesh_transforms(json& m, MeshSpec& s, int d, const Reader& R) {
     s.jitter = R.number(j, p, "amplitude", between(0, true, 0.5, false));
     s.jitter_seed = static_cast<unsigned long>(R.integer(j, p, "seed", 0, 4294967295L, 1));
   }
+  if (m.contains("refine"))  // each triangle into 4, each tetrahedron into 8, k times (mesh/refine.hpp)
+    s.refine = static_cast<int>(R.integer(m, P, "refine", 0, 10, 0));
 }
 
 }  // namespace
@@ -352,7 +355,7 @@ void read_mesh(json& doc, Case& c, const Reader& R, const fs::path& base_dir, bo
   // checks its own keys.
   read_mesh_transforms(whole, c.mesh, c.dim, R);
   json transforms = json::object();
-  for (const char* k : {"rotation", "jitter"})
+  for (const char* k : {"rotation", "jitter", "refine"})
     if (whole.contains(k)) {
       transforms[k] = whole[k];
       whole.erase(k);

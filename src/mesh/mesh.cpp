@@ -15,6 +15,7 @@
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh_internal.hpp"
 #include "mesh/particles.hpp"
+#include "mesh/refine.hpp"
 
 namespace fdem {
 
@@ -378,6 +379,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
                        "D but the case is " + std::to_string(dim) + "D");
   };
   const std::string region = spec.region.empty() ? std::string("body") : spec.region;
+  // the memory checks before meshing count the refined mesh (mesh.refine)
+  const double rf = refine_factor(dim, spec.refine);
+  const std::string refined = spec.refine > 0 ? ", refined " + std::to_string(spec.refine) + " times" : "";
   if (spec.kind == "file") {
     if (spec.file.empty()) throw InputError("mesh kind 'file' needs a file name");
     return read_gmsh(spec.file, dim, spec.element_size);
@@ -387,9 +391,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double cx = cells_for(spec.kind, "x", spec.cells[0], spec.size[0], spec.element_size);
     const double cy = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
     const double n[2] = {cx, cy};
-    check_fits_in_memory(4.0 * cx * cy, 2, block_request(spec, n, 2),
+    check_fits_in_memory(4.0 * cx * cy * rf, 2, block_request(spec, n, 2) + refined,
                          spec.cells[0] > 0 ? 0.0 : spec.element_size, "mesh.element_size",
-                         4.0 * spec.size[0] * spec.size[1]);
+                         4.0 * spec.size[0] * spec.size[1] * rf);
     const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
     const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
     return generate_crossed_rectangle(spec.origin[0], spec.origin[1], spec.size[0], spec.size[1],
@@ -401,9 +405,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     const double cy = cells_for(spec.kind, "y", spec.cells[1], spec.size[1], spec.element_size);
     const double cz = cells_for(spec.kind, "z", spec.cells[2], spec.size[2], spec.element_size);
     const double n[3] = {cx, cy, cz};
-    check_fits_in_memory(6.0 * cx * cy * cz, 3, block_request(spec, n, 3),
+    check_fits_in_memory(6.0 * cx * cy * cz * rf, 3, block_request(spec, n, 3) + refined,
                          spec.cells[0] > 0 ? 0.0 : spec.element_size, "mesh.element_size",
-                         6.0 * spec.size[0] * spec.size[1] * spec.size[2]);
+                         6.0 * spec.size[0] * spec.size[1] * spec.size[2] * rf);
     const int nx = to_cells(spec.kind, "x", cx, spec.size[0], spec.element_size);
     const int ny = to_cells(spec.kind, "y", cy, spec.size[1], spec.element_size);
     const int nz = to_cells(spec.kind, "z", cz, spec.size[2], spec.element_size);
@@ -413,9 +417,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     need_dim(2);
     const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
     if (R > 0 && h > 0 && h <= R)
-      check_fits_in_memory(estimate_gmsh_elements(2, pi * R * R, h), 2,
-                           "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m)", h,
-                           "mesh.element_size", estimate_gmsh_elements(2, pi * R * R, 1.0));
+      check_fits_in_memory(estimate_gmsh_elements(2, pi * R * R, h) * rf, 2,
+                           "mesh.element_size = " + fmt(h) + " m (disc of radius " + fmt(R) + " m" + refined + ")",
+                           h, "mesh.element_size", estimate_gmsh_elements(2, pi * R * R, 1.0) * rf);
     return generate_disc(spec.origin[0], spec.origin[1], spec.radius, spec.element_size, region,
                          spec.diameter[0], spec.diameter[1], spec.symmetric);
   }
@@ -423,9 +427,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
     need_dim(3);
     const double pi = std::acos(-1.0), R = spec.radius, h = spec.element_size;
     if (R > 0 && h > 0 && h <= R)
-      check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h), 3,
-                           "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m)", h,
-                           "mesh.element_size", estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, 1.0));
+      check_fits_in_memory(estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, h) * rf, 3,
+                           "mesh.element_size = " + fmt(h) + " m (sphere of radius " + fmt(R) + " m" + refined + ")",
+                           h, "mesh.element_size", estimate_gmsh_elements(3, 4.0 / 3.0 * pi * R * R * R, 1.0) * rf);
     return generate_sphere(spec.origin, spec.radius, spec.element_size, region, spec.mesher);
   }
   if (spec.kind == "particles") {  // many particles, each its own body (particles.cpp)
@@ -438,9 +442,9 @@ HostMesh build_mesh(const MeshSpec& spec, int dim) {
                            : spec.shape == "disc" ? pi * spec.radius * spec.radius
                                                   : spec.size[0] * spec.size[1];
     if (h > 0 && measure > 0)
-      check_fits_in_memory(estimate_gmsh_elements(dim, measure, h), dim,
-                           "mesh.element_size = " + fmt(h) + " m (grains)", h, "mesh.element_size",
-                           estimate_gmsh_elements(dim, measure, 1.0));
+      check_fits_in_memory(estimate_gmsh_elements(dim, measure, h) * rf, dim,
+                           "mesh.element_size = " + fmt(h) + " m (grains" + refined + ")", h, "mesh.element_size",
+                           estimate_gmsh_elements(dim, measure, 1.0) * rf);
     return dim == 3 ? generate_grains_3d(spec) : generate_grains(spec);
   }
   throw InputError("mesh: unknown kind '" + spec.kind +

@@ -98,6 +98,9 @@ struct MeshSpec {
   std::array<double, 3> rotation_center{0, 0, 0};
   double jitter = 0;
   unsigned long jitter_seed = 1;
+  // Uniform refinement before the transforms (src/mesh/refine.hpp): each triangle into 4, each
+  // tetrahedron into 8, `refine` times (0: none).
+  int refine = 0;
 };
 
 // Readers and generators. All throw InputError with a message naming the file (or generator), the

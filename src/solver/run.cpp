@@ -19,6 +19,7 @@
 #include "io/output.hpp"
 #include "mesh/memory_budget.hpp"
 #include "mesh/mesh.hpp"
+#include "mesh/refine.hpp"
 #include "parallel/comm.hpp"
 #include "parallel/decompose.hpp"
 #include "parallel/partition.hpp"
@@ -54,8 +55,18 @@ HostMesh prepare_mesh(const Case& c) {
   using setup_times::Phase;
   Phase build("mesh");
   HostMesh mesh = build_mesh(c.mesh, c.dim);
-  transform_mesh(mesh, c.mesh);  // mesh.rotation, mesh.jitter
   build.stop();
+  if (c.mesh.refine > 0) {  // mesh.refine: the coarse mesh's exact count first
+    Phase refine("refinement");
+    check_fits_in_memory(static_cast<double>(mesh.num_elems()) * refine_factor(c.dim, c.mesh.refine), c.dim,
+                         "mesh.refine = " + std::to_string(c.mesh.refine) + " (" + std::to_string(mesh.num_elems()) +
+                             " coarse elements)");
+    mesh = refine_mesh(mesh, c.mesh.refine, curved_surfaces(c.mesh, c.dim));
+  }
+  if (c.mesh.rotation_deg != 0 || c.mesh.jitter > 0) {
+    Phase transform("mesh_transforms");
+    transform_mesh(mesh, c.mesh);  // mesh.rotation, mesh.jitter
+  }
   Phase checks("mesh_checks");
   const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
   check_elements(mesh, source);

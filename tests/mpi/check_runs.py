@@ -121,6 +121,11 @@ CASES = {
 # the same with contact on, as the cases ship it (contact.zone derived: 1 mean element size)
 CASES.update({name + "+contact": (case, [x for x in sets if x not in COMMON], cols, peak, intact)
               for name, (case, sets, cols, peak, intact) in CASES.items() if name != "beam"})
+# the disc of "disc" from a mesh twice as coarse refined once (mesh.refine, src/mesh/refine.hpp):
+# 600 elements refined into 2400, the same checks (contact off, as "disc")
+CASES["disc_refined"] = (CASES["disc"][0],
+                         [x.replace("mesh.element_size=0.006", "mesh.element_size=0.012") for x in CASES["disc"][1]]
+                         + ["mesh.refine=1"], CASES["disc"][2], CASES["disc"][3], CASES["disc"][4])
 # the 3D impact at 40 m/s, 4000 steps, contact on: it breaks into about 220 fragments that touch
 # each other and the crack faces. After that much fracture round-off meets failure thresholds and
 # the runs part ways: the run is chaotic. Measured on 1 process (2026-12-05): with the impact speed
@@ -750,6 +755,15 @@ def check_refusals(fdem):
     said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
     check(r.returncode == 2 and len(said) == 1 and "without an element" in said[0] and "dt = inf" not in r.stderr,
           f"a partition that leaves a process without elements: exit {r.returncode}, {said}")
+    # mesh.refine out of range or too large for the memory: exit 2 before any work, the estimate named
+    r = run(fdem, 2, BAR, ["mesh.refine=-1"], os.path.join(WORK, "refine-negative"), timeout=120)
+    said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+    check(r.returncode == 2 and len(said) >= 1 and "mesh.refine: value -1 is out of range" in said[0],
+          f"mesh.refine = -1 over 2 processes: exit {r.returncode}, {said[:1]}")
+    r = run(fdem, 2, BAR, ["mesh.refine=10", "mesh.cells=[40, 40]"], os.path.join(WORK, "refine-large"), timeout=120)
+    said = [l for l in r.stderr.splitlines() if l.startswith("error:")]
+    check(r.returncode == 2 and len(said) >= 1 and "refined 10 times would make about" in said[0],
+          f"mesh.refine = 10 over 2 processes: exit {r.returncode}, {said[:1]}")
     cmd = command(fdem, 2, BAR, [], os.path.join(WORK, "partition"))
     at = cmd.index("run")
     cmd[at:at + 1] = ["partition"]
@@ -1042,6 +1056,9 @@ def main():
     at = [r[e] for r in rows if r[t] <= 6e-5]
     check(at and at[-1] > 0, f"impact2d+contact: contact energy {at[-1] if at else 0:.3g} J at the checkpoint (> 0)")
     check_restarts(fdem, "impact2d+contact", ck, AFTER_TOL["impact2d"])
+
+    # a refined mesh: its checkpoints restart on any count as the directly meshed one's
+    check_restarts(fdem, "disc_refined", ["output.checkpoint_every=7e-5"])
 
     print("impact3d at 40 m/s: fragments")
     base = None
