@@ -115,16 +115,18 @@ void reorder_interfaces(HostMesh& mesh, const std::vector<int>& node_new, const 
 
 }  // namespace
 
-void reorder_for_locality(HostMesh& mesh) {
+void reorder_for_locality(HostMesh& mesh, bool elements) {
   const int dim = mesh.dim;
   const int npe = dim + 1;
   const int ne = mesh.num_elems();
   const int nn = mesh.num_nodes();
   if (ne == 0) return;
-  const std::vector<std::uint64_t> code = morton_codes(mesh);
   std::vector<int> order(ne);  // order[new] = old
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return code[a] < code[b]; });
+  if (elements) {
+    const std::vector<std::uint64_t> code = morton_codes(mesh);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return code[a] < code[b]; });
+  }
   std::vector<int> elem_new(ne);  // old -> new
   for (int i = 0; i < ne; ++i) elem_new[order[i]] = i;
   const std::vector<int> node_new = number_by_first_use(mesh, order);

@@ -164,8 +164,9 @@ struct BodyCheck {
 BodyCheck check_bodies(const HostMesh& mesh, const std::string& source);
 
 // Renumber elements along a space-filling curve and nodes in order of first use, so that
-// neighbours sit near each other in memory. Call before insert_interfaces.
-void reorder_for_locality(HostMesh& mesh);
+// neighbours sit near each other in memory. Call before insert_interfaces. elements false: the
+// elements keep their order (a refined mesh's, src/mesh/refine.hpp), only the nodes follow it.
+void reorder_for_locality(HostMesh& mesh, bool elements = true);
 
 // Interface insertion: every element of a fracturable region gets its own copies of its nodes,
 // and every face shared by two elements of which at least one is fracturable gets an interface.

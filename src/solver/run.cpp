@@ -56,11 +56,16 @@ HostMesh prepare_mesh(const Case& c) {
   Phase build("mesh");
   HostMesh mesh = build_mesh(c.mesh, c.dim);
   build.stop();
-  if (c.mesh.refine > 0) {  // mesh.refine: the coarse mesh's exact count first
+  // mesh.refine: the coarse mesh's exact count first; the coarse mesh renumbered for locality and
+  // the fine one left in the order of its global ids (each coarse element's children together), the
+  // order a process that refines only its own coarse elements can compute (docs/parallel.md, "Scale")
+  const bool refined = c.mesh.refine > 0;
+  if (refined) {
     Phase refine("refinement");
     check_fits_in_memory(static_cast<double>(mesh.num_elems()) * refine_factor(c.dim, c.mesh.refine), c.dim,
                          "mesh.refine = " + std::to_string(c.mesh.refine) + " (" + std::to_string(mesh.num_elems()) +
                              " coarse elements)");
+    reorder_for_locality(mesh);
     mesh = refine_mesh(mesh, c.mesh.refine, curved_surfaces(c.mesh, c.dim));
   }
   if (c.mesh.rotation_deg != 0 || c.mesh.jitter > 0) {
@@ -77,7 +82,7 @@ HostMesh prepare_mesh(const Case& c) {
   for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
   checks.stop();
   Phase reorder("renumbering");
-  reorder_for_locality(mesh);
+  reorder_for_locality(mesh, !refined);  // a refined mesh's elements keep their order (above)
   reorder.stop();
   if (!c.fracturable_regions.empty() || !c.surface_iface_material.empty()) {
     Phase insert("interface_insertion");
