@@ -220,7 +220,7 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
                        {"gmsh_peak_rss_bytes", setup_times::gmsh_peak_bytes()}};
   if (view_memory::enabled()) {
     // the Views' peak (what a GPU would hold, less the host's scatter copies): docs/performance.md
-    nlohmann::json vm = view_memory::report();
+    nlohmann::json vm = view_memory::report(64);  // (every View of a run: about 60)
     const double elems = std::max(1, sim.m.ne);
     const double scatter = vm["peak_by_kind"].value("scatter", 0.0);
     vm["peak_bytes_per_element"] = vm["peak_bytes"].get<double>() / elems;
@@ -254,6 +254,49 @@ template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulati
                                     const HistoryTable<2>&, RunFragments<2>*, const RunRecord&);
 template nlohmann::json run_summary(const Case&, const nlohmann::json&, Simulation<3>&,
                                     const HistoryTable<3>&, RunFragments<3>*, const RunRecord&);
+
+namespace {
+
+// Every process's set-up (issue 49: the phases' times and the peak memory per process): a row per
+// process of each phase's wall seconds (0 where it had none; the phases not listed summed under
+// "unlisted"), its whole set-up's, its peak resident memory and its own elements, on process 0.
+nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
+  static const std::vector<std::string> names = {
+      "gmsh_meshing", "gmsh_extraction", "gmsh_process", "mesh", "refinement", "mesh_transforms",
+      "mesh_checks", "renumbering", "interface_insertion", "decomposition", "parts_sent", "model_elements",
+      "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
+  const nlohmann::json st = setup_times::report();
+  std::vector<double> mine(names.size() + 4, 0.0);
+  for (const auto& ph : st.at("phases")) {
+    const auto it = std::find(names.begin(), names.end(), ph.at("name").get<std::string>());
+    mine[it == names.end() ? names.size() : it - names.begin()] += ph.at("wall_seconds").get<double>();
+  }
+  mine[names.size() + 1] = st.at("wall_seconds").get<double>();
+  mine[names.size() + 2] = setup_times::peak_rss_bytes();
+  mine[names.size() + 3] = own_elements;
+  std::vector<double> all;
+  comm.gather(mine, all);
+  const std::size_t w = mine.size();
+  nlohmann::json phases = nlohmann::json::object(), per_elem = nlohmann::json::array(),
+                 total = nlohmann::json::array();
+  for (std::size_t k = 0; k <= names.size(); ++k) {
+    std::vector<double> col;
+    bool any = false;
+    for (std::size_t r = 0; r + w <= all.size(); r += w) {
+      col.push_back(all[r + k]);
+      any = any || all[r + k] > 0;
+    }
+    if (any) phases[k < names.size() ? names[k] : "unlisted"] = col;
+  }
+  for (std::size_t r = 0; r + w <= all.size(); r += w) {
+    total.push_back(all[r + names.size() + 1]);
+    per_elem.push_back(all[r + names.size() + 2] / std::max(1.0, all[r + names.size() + 3]));
+  }
+  return {{"setup_wall_seconds", total}, {"setup_phase_wall_seconds", phases},
+          {"peak_rss_bytes_per_own_element", per_elem}};
+}
+
+}  // namespace
 
 template <int D>
 nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const CutHistory& cuts,
@@ -292,6 +335,7 @@ nlohmann::json processes_report(const Case& c, const Simulation<D>& sim, const C
                       {"gpu_aware_mpi", comm.gpu_aware()},
                       {"peak_rss_bytes", peaks},
                       {"busy_seconds", busy}};
+  p.update(setup_per_process(comm, sim.m.owned_elems()));
   // the balance was checked (contact over processes: docs/parallel.md "Rebalancing")
   if (checked) {
     p["rebalance_above"] = c.rebalance_above;
