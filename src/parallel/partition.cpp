@@ -196,7 +196,9 @@ ElementGraph element_graph(const HostMesh& m) {
 
 #ifdef FDEM_HAVE_METIS
 // METIS_PartGraphKway on the element graph with vertex weights vwgt (one per element, >= 1).
-static std::vector<int> metis_kway(const ElementGraph& g, std::vector<idx_t> vwgt, int parts) {
+// adjwgt: one weight per adjacency entry (empty: none).
+static std::vector<int> metis_kway(const ElementGraph& g, std::vector<idx_t> vwgt, int parts,
+                                   std::vector<idx_t> adjwgt = {}) {
   const idx_t ne = static_cast<idx_t>(vwgt.size());
   std::vector<idx_t> xadj(g.xadj.begin(), g.xadj.end()), adj(g.adj.begin(), g.adj.end()), out(ne, 0);
   idx_t nv = ne, ncon = 1, np = parts, objval = 0;
@@ -210,12 +212,44 @@ static std::vector<int> metis_kway(const ElementGraph& g, std::vector<idx_t> vwg
   // load within 1 % of the mean (METIS's default: 3 %): 1-3 % more interfaces cut on the 3D impact
   // meshes at 8 and 64 parts, imbalance 0.3-1.0 % instead of 0.7-3.0 % (docs/parallel.md)
   options[METIS_OPTION_UFACTOR] = 10;
-  const int rc = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adj.data(), vwgt.data(), nullptr, nullptr, &np,
+  const int rc = METIS_PartGraphKway(&nv, &ncon, xadj.data(), adj.data(), vwgt.data(), nullptr,
+                                     adjwgt.empty() ? nullptr : adjwgt.data(), &np,
                                      nullptr, nullptr, options, &objval, out.data());
   if (rc != METIS_OK)
     throw std::runtime_error("METIS_PartGraphKway failed (status " + std::to_string(rc) + ") for " +
                              std::to_string(ne) + " elements into " + std::to_string(parts) + " parts");
   return std::vector<int>(out.begin(), out.end());
+}
+
+// METIS on the graph of groups of `group` consecutive elements (a refined mesh's children of one
+// coarse element): a group's weight is its elements', an edge's the element pairs it joins.
+static std::vector<int> metis_groups(const ElementGraph& g, int group, int parts) {
+  const int ne = static_cast<int>(g.weight.size()), ng = ne / group;
+  ElementGraph q;
+  std::vector<idx_t> vwgt(ng, 0), adjwgt;
+  q.xadj.assign(1, 0);
+  std::vector<int> slot(ng, -1);  // this group's entry of each neighbour group
+  for (int G = 0; G < ng; ++G) {
+    const int first = static_cast<int>(q.adj.size());
+    for (int e = G * group; e < (G + 1) * group; ++e) {
+      vwgt[G] += g.weight[e];
+      for (int j = g.xadj[e]; j < g.xadj[e + 1]; ++j) {
+        const int H = g.adj[j] / group;
+        if (H == G) continue;
+        if (slot[H] < first) {
+          slot[H] = static_cast<int>(q.adj.size());
+          q.adj.push_back(H);
+          adjwgt.push_back(0);
+        }
+        ++adjwgt[slot[H]];
+      }
+    }
+    q.xadj.push_back(static_cast<int>(q.adj.size()));
+  }
+  const std::vector<int> gpart = metis_kway(q, std::move(vwgt), parts, std::move(adjwgt));
+  std::vector<int> part(ne);
+  for (int e = 0; e < ne; ++e) part[e] = gpart[e / group];
+  return part;
 }
 #endif
 
@@ -266,7 +300,7 @@ void partition_init(PartitionMethod method) {
 #endif
 }
 
-std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method) {
+std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method, int group) {
   const int ne = mesh.num_elems();
   if (parts < 1 || parts > ne)
     throw InputError("--parts " + std::to_string(parts) + " is out of range: give an integer in [1, " +
@@ -276,7 +310,11 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
   if (method == PartitionMethod::Metis) {
 #ifdef FDEM_HAVE_METIS
     const ElementGraph g = element_graph(mesh);
-    part = metis_kway(g, std::vector<idx_t>(g.weight.begin(), g.weight.end()), parts);
+    // groups (a refined mesh): the coarse graph, where each part still gets at least 8 groups
+    if (group > 1 && ne % group == 0 && ne / group >= 8 * parts)
+      part = metis_groups(g, group, parts);
+    else
+      part = metis_kway(g, std::vector<idx_t>(g.weight.begin(), g.weight.end()), parts);
 #else
     throw InputError(kNoMetis);
 #endif

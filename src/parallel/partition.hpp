@@ -48,7 +48,11 @@ ElementGraph element_graph(const HostMesh& mesh);
 // A part id in [0, parts) per element. Throws InputError for parts < 1 or parts > elements
 // (naming --parts and the allowed range) and for metis in a build without METIS.
 // Deterministic: the same mesh and arguments give the same result.
-std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method);
+// group > 1 (metis): the elements come in groups of `group` consecutive ones that stay together
+// (a refined mesh's children of one coarse element, src/mesh/refine.hpp): METIS partitions the
+// groups' graph (the coarse mesh's), 1/group of the work; ignored where the element count is not a
+// multiple of it or the parts would get fewer than 8 groups each.
+std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method, int group = 1);
 
 // Recursive coordinate bisection with the given work per element (positive and finite): the cut
 // of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Zoltan's

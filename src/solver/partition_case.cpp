@@ -117,7 +117,7 @@ nlohmann::json partition_case(const std::string& case_path, const std::vector<st
   const HostMesh mesh = prepare_mesh(c);
   partition_init(method);  // MPI_Init for Zoltan: not part of the partition's time
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<int> part = partition_elements(mesh, parts, method);
+  const std::vector<int> part = partition_elements(mesh, parts, method, refined_group(c));
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PartitionStats s = partition_stats(mesh, part, parts);
   s.seconds = seconds;

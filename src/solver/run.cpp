@@ -102,6 +102,10 @@ HostMesh prepare_mesh(const Case& c) {
   return mesh;
 }
 
+int refined_group(const Case& c) {
+  return c.mesh.refine > 0 ? static_cast<int>(refine_factor(c.dim, c.mesh.refine) + 0.5) : 1;
+}
+
 namespace {
 
 // The resolved case without the keys that do not change the results: the checkpoint interval,

@@ -48,7 +48,12 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
                           bool moduli = false);
 
 // Mesh of a case, ready for the solver: built or read, checked, renumbered (Morton order of the
-// element centroids), interfaces inserted. Throws InputError. Also used by `fdem partition`.
+// element centroids; a refined mesh: the coarse mesh's, each coarse element's children together),
+// interfaces inserted. Throws InputError. Also used by `fdem partition`.
 HostMesh prepare_mesh(const Case& c);
+// The elements of prepare_mesh's mesh come in groups of this many consecutive ones, each a coarse
+// element's children (mesh.refine, src/mesh/refine.hpp; 1: no refinement): a partition keeps
+// them together (partition_elements' group).
+int refined_group(const Case& c);
 
 }  // namespace fdem

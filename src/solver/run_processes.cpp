@@ -170,7 +170,7 @@ void ProcessesRun::first_parts() {
   std::vector<int> elem_part =
       resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0
           ? restart_parts(*at, bisection)
-          : partition_elements(mesh, comm_.size(), method);
+          : partition_elements(mesh, comm_.size(), method, refined_group(c_));
   check_every_part_filled(elem_part);
   packed_ = packed_parts(mesh, elem_part, comm_.size(), reach, at);
   elem_part_at_start_ = std::move(elem_part);
