@@ -263,3 +263,36 @@ TEST(Refine, PartIsTheWholeRefinementRestricted) {
 }
 
 }  // namespace
+
+namespace {
+
+// The interface numbering of the whole refined mesh follows from the coarse mesh: every interface
+// insert_interfaces makes (side A: the lower element) lies in the range of its side A's coarse
+// element that refined_interface_offsets computes.
+TEST(Refine, InterfaceNumberingFollowsFromTheCoarseMesh) {
+  for (int dim : {2, 3}) {
+    SCOPED_TRACE("dim " + std::to_string(dim));
+    const double R = 0.025;
+    const HostMesh coarse = dim == 3 ? fdem::generate_sphere({0, 0, 0}, R, 0.01)
+                                     : fdem::generate_disc(0, 0, R, 0.005, "body", 0, 0, false);
+    for (int k : {1, 2}) {
+      const std::vector<fdem::CurvedSurface> s{{{0, 0, 0}, R}};
+      HostMesh fine = fdem::refine_mesh(coarse, k, s);
+      fdem::insert_interfaces(fine, {true});
+      const std::vector<std::int64_t> off =
+          fdem::refined_interface_offsets(coarse, fdem::coarse_topology(coarse, k, s));
+      ASSERT_EQ(off.size(), static_cast<std::size_t>(coarse.num_elems()) + 1);
+      EXPECT_EQ(off.back(), fine.num_ifaces());
+      const int children = static_cast<int>(fdem::refine_factor(dim, k));
+      for (int i = 0; i < fine.num_ifaces(); ++i) {
+        const int a = fine.iface_elems[2 * i], b = fine.iface_elems[2 * i + 1];
+        ASSERT_LT(a, b);
+        const int E = a / children;
+        ASSERT_GE(i, off[E]) << "interface " << i;
+        ASSERT_LT(i, off[E + 1]) << "interface " << i;
+      }
+    }
+  }
+}
+
+}  // namespace

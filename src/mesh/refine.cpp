@@ -600,6 +600,33 @@ RefinedPart refine_elements(const HostMesh& m, const CoarseTopology& t, const st
   return out;
 }
 
+std::vector<std::int64_t> refined_interface_offsets(const HostMesh& m, const CoarseTopology& t) {
+  const int d = m.dim, npe = d + 1, ne = m.num_elems();
+  const std::int64_t children = static_cast<std::int64_t>(refine_factor(d, t.levels) + 0.5);
+  const std::int64_t per_facet = d == 2 ? t.m : static_cast<std::int64_t>(t.m) * t.m;
+  const std::int64_t inside = (npe * children - npe * per_facet) / 2;
+  // the coarse elements at each facet (at most two)
+  const std::vector<int>& facet_of = d == 2 ? t.elem_edges : t.elem_faces;
+  const std::size_t facets = d == 2 ? t.edges.size() : t.faces.size();
+  std::vector<int> first(facets, -1), second(facets, -1);
+  for (int e = 0; e < ne; ++e)
+    for (int f = 0; f < npe; ++f) {
+      const int F = facet_of[static_cast<std::size_t>(e) * npe + f];
+      (first[F] < 0 ? first[F] : second[F]) = e;
+    }
+  std::vector<std::int64_t> off(static_cast<std::size_t>(ne) + 1, 0);
+  for (int e = 0; e < ne; ++e) {
+    std::int64_t n = inside;
+    for (int f = 0; f < npe; ++f) {
+      const int F = facet_of[static_cast<std::size_t>(e) * npe + f];
+      const int other = first[F] == e ? second[F] : first[F];
+      if (other > e) n += per_facet;
+    }
+    off[e + 1] = off[e] + n;
+  }
+  return off;
+}
+
 HostMesh refine_mesh(const HostMesh& coarse, int levels, const std::vector<CurvedSurface>& surfaces) {
   if (levels == 0) return coarse;
   const CoarseTopology t = coarse_topology(coarse, levels, surfaces);

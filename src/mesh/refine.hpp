@@ -67,6 +67,15 @@ struct RefinedPart {
 RefinedPart refine_elements(const HostMesh& coarse, const CoarseTopology& topo,
                             const std::vector<int>& coarse_elems);
 
+// Where the interfaces of each coarse element's children start in the numbering insert_interfaces
+// gives the whole refined mesh when every region is fracturable and the fine elements are in the
+// order of their global ids (interfaces ordered by their side-A element, the lower one): a prefix
+// sum over the coarse elements of the faces inside each one's refinement and the fine faces of its
+// coarse faces towards a higher coarse element, computed from the coarse mesh alone, so that a
+// process that inserts only its own part's interfaces numbers them as the whole mesh would.
+// Size: coarse elements + 1 (the last: the whole mesh's interface count).
+std::vector<std::int64_t> refined_interface_offsets(const HostMesh& coarse, const CoarseTopology& topo);
+
 // The whole mesh refined `levels` times; nodes in the order of their global ids (so node i is
 // the coarse mesh's node i for every coarse node), elements in the order of theirs. levels 0:
 // the mesh as it is.
