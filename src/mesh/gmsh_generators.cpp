@@ -64,9 +64,11 @@ HostMesh mirror_across_diameter(HostMesh half, double cx, double cy, double ux, 
       if (image[set[k]] != set[k]) set.push_back(image[set[k]]);
     std::sort(set.begin(), set.end());
   }
-  for (auto& [name, f] : m.face_sets) {
+  for (auto& [name, f] : m.face_sets) {  // (a segment on the diameter is its own image)
     const size_t n = f.size() / 2;
-    for (size_t k = 0; k < n; ++k) f.insert(f.end(), {image[f[2 * k + 1]], image[f[2 * k]]});
+    for (size_t k = 0; k < n; ++k)
+      if (image[f[2 * k]] != f[2 * k] || image[f[2 * k + 1]] != f[2 * k + 1])
+        f.insert(f.end(), {image[f[2 * k + 1]], image[f[2 * k]]});
   }
   return m;
 }
@@ -101,13 +103,15 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       gmsh::model::setPhysicalName(2, ps, rname);
       const int pc = gmsh::model::addPhysicalGroup(1, {arc});
       gmsh::model::setPhysicalName(1, pc, "boundary");
+      const int pd = gmsh::model::addPhysicalGroup(1, {line});
+      gmsh::model::setPhysicalName(1, pd, "diameter");
     });
     return mirror_across_diameter(std::move(half), cx, cy, ux, uy, R);
   }
   return generate_with_gmsh(who, "mesh the disc", 2, h, 1, [&] {
     gmsh::model::add("disc");
     const int s = gmsh::model::occ::addDisk(cx, cy, 0.0, R, R);
-    std::vector<int> surfaces{s};
+    std::vector<int> surfaces{s}, diameter;
     if (len > 0) {  // the diameter along (dx, dy): the disc cut into two halves that share it
       const double ux = R * dx / len, uy = R * dy / len;
       const int a = gmsh::model::occ::addPoint(cx + ux, cy + uy, 0.0);
@@ -119,6 +123,7 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
       surfaces.clear();
       for (const auto& [d, t] : out)
         if (d == 2) surfaces.push_back(t);
+      for (const auto& piece : map.at(1)) diameter.push_back(piece.second);  // the line's pieces
     }
     gmsh::model::occ::synchronize();
     gmsh::vectorpair faces, bnd;
@@ -130,6 +135,10 @@ HostMesh generate_disc(double cx, double cy, double R, double h, const std::stri
     gmsh::model::setPhysicalName(2, ps, rname);
     const int pc = gmsh::model::addPhysicalGroup(1, curves);
     gmsh::model::setPhysicalName(1, pc, "boundary");
+    if (!diameter.empty()) {
+      const int pd = gmsh::model::addPhysicalGroup(1, diameter);
+      gmsh::model::setPhysicalName(1, pd, "diameter");
+    }
   });
 }
 

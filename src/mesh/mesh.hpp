@@ -114,7 +114,8 @@ HostMesh generate_crossed_rectangle(double x0, double y0, double w, double h, in
                                     const std::string& region = "body");
 // Disc of radius R centred at (cx, cy), unstructured triangles of size h (Gmsh). Node sets:
 // "boundary", "all". A non-zero (dx, dy) also meshes the diameter along that direction as element
-// edges (nodes at both of its ends on the circle), so that a crack can run straight along it;
+// edges (nodes at both of its ends on the circle), so that a crack can run straight along it
+// (node set and face set "diameter": a jitter keeps its nodes, a refinement its straightness);
 // with `mirror`, the mesh is also symmetric about that diameter (one half meshed by Gmsh, the
 // other its mirror image), so that a symmetric load sees a symmetric mesh.
 HostMesh generate_disc(double cx, double cy, double R, double h, const std::string& region = "body",

@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -16,12 +15,6 @@
 
 namespace fdem {
 namespace {
-
-std::string fmt_count(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
-}
 
 using mesh_detail::face_node;
 using Lattice = std::array<int, 4>;  // integer barycentric coordinates (b_3 = 0 in 2D)
@@ -633,7 +626,7 @@ HostMesh refine_mesh(const HostMesh& coarse, int levels, const std::vector<Curve
   const double elements = coarse.num_elems() * refine_factor(coarse.dim, levels);
   if (t.num_fine_nodes > 2147483000LL || elements > 2147483000.0)
     throw InputError("mesh.refine = " + std::to_string(levels) + " makes " + std::to_string(t.num_fine_nodes) +
-                     " nodes and " + fmt_count(elements) + " elements, more than one process numbers (2^31)");
+                     " nodes and " + mesh_detail::fmt(elements) + " elements, more than one process numbers (2^31)");
   std::vector<int> all(coarse.num_elems());
   for (int e = 0; e < coarse.num_elems(); ++e) all[e] = e;
   RefinedPart p = refine_elements(coarse, t, all);
