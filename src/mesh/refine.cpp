@@ -62,7 +62,7 @@ int find_key(const std::vector<K>& sorted, const K& k) {
 Key2 edge_key(int a, int b) { return a < b ? Key2{a, b} : Key2{b, a}; }
 Key3 face_key3(int a, int b, int c) {
   Key3 k{a, b, c};
-  std::sort(k.begin(), k.end());
+  mesh_detail::sort_face_key(k, 3);
   return k;
 }
 
