@@ -10,7 +10,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <numeric>
 #include <utility>
 #include <vector>
 
@@ -136,12 +135,9 @@ void ParallelFrames::write(const std::string& dir, const FramePart& f) const {
   write_rows(t, "damage", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, static_cast<hsize_t>(f.whole_ifaces), 0,
              ifaces, d.data());
 
-  if (f.has_fragment) {  // process 0 holds every element's id (the fragment analysis is its own)
-    Rows all;
-    if (f.fragment && ne > 0) all.runs.add(0, ne);
-    all.order.resize(f.fragment ? static_cast<size_t>(ne) : 0);
-    std::iota(all.order.begin(), all.order.end(), size_t{0});
-    write_rows(t, "fragment", H5T_STD_I32LE, H5T_NATIVE_INT, ne, 0, all, f.fragment);
+  if (f.has_fragment) {  // every process its own elements' ids (solver/fragment_parts.hpp)
+    const std::vector<int> fr = pack(f.fragment, 1, 1, elems);
+    write_rows(t, "fragment", H5T_STD_I32LE, H5T_NATIVE_INT, ne, 0, elems, fr.data());
   }
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush after " + gname);
 }

@@ -28,7 +28,7 @@ struct FramePart {
   const double* stress = nullptr;  // elems x 6 (xx, yy, zz, xy, yz, xz)
   const double* damage = nullptr;  // ifaces
   bool has_fragment = false;       // the same on every process
-  const int* fragment = nullptr;   // every element's fragment id, whole-mesh order, on process 0 only
+  const int* fragment = nullptr;   // elems: the own elements' fragment ids
 };
 
 // The frames of a run over several processes: an MPI-IO access property list

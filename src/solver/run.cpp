@@ -191,8 +191,9 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
   write_file_atomic(p.out + "/case.json", c.resolved.dump(2) + "\n");
   // the run takes the mesh and frees it once it is set up
   const StateArrays* r = p.checkpoint();
-  return c.dim == 2 ? run_dim<2>(c, std::move(p.mesh), p.out, opt, p.id, r).summary
-                    : run_dim<3>(c, std::move(p.mesh), p.out, opt, p.id, r).summary;
+  auto mesh = std::make_shared<const HostMesh>(std::move(p.mesh));
+  return c.dim == 2 ? run_dim<2>(c, std::move(mesh), p.out, opt, p.id, r).summary
+                    : run_dim<3>(c, std::move(mesh), p.out, opt, p.id, r).summary;
 }
 
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides, bool moduli) {

@@ -4,6 +4,7 @@
 #include <csignal>
 #include <cstdio>
 #include <stdexcept>
+#include <tuple>
 
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
@@ -18,10 +19,10 @@ double seconds(std::chrono::steady_clock::duration d) { return std::chrono::dura
 }  // namespace
 
 template <int D>
-RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
+RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const std::string& out, const RunOptions& opt,
                     const RunIdentity& id, const StateArrays* restart, const SubMesh* part, CutHistory* cuts)
     : c_(c),
-      mesh_(std::make_unique<HostMesh>(std::move(mesh))),
+      mesh_(std::move(mesh)),
       out_(out),
       opt_(opt),
       id_(id),
@@ -46,6 +47,7 @@ RunLoop<D>::RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, cons
   } else {
     if (writes_) history_->open(out, false);
     if (fragments_on()) frag_ = parts_->fragments(c, *mesh_, out, nullptr, "");
+    if (frag_) frag_->count_from(cuts_->labellings, cuts_->label_seconds);
     snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
@@ -80,6 +82,7 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   if (writes_) history_->open(out_, true);
   if (fragments_on()) frag_ = parts_->fragments(c_, *mesh_, out_, &s, r.file);
+  if (frag_) frag_->count_from(cuts_->labellings, cuts_->label_seconds);
   snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
 }
 
@@ -255,6 +258,7 @@ LoopEnd RunLoop<D>::recut() {
   collect_state(st, c0, ckpt_written_);
   st.f64["recut/mass_momentum"] = whole_mass_momentum(sim_);
   st.f64["recut/node_work"] = sim_.node_work_whole();  // (process 0: the weights of the cut)
+  if (frag_) std::tie(cuts_->labellings, cuts_->label_seconds) = frag_->labelling();
   const auto& b = sim_.balance();
   // the cut's time: gathering the state here, the partition and the sending (solver/run.cpp), the
   // new parts' set-up (the next RunLoop's, until its loop starts); this part's own set-up if it
@@ -340,17 +344,18 @@ nlohmann::json RunLoop<D>::finish(const std::string& stop_reason, double loop_wa
 }
 
 template <int D>
-LoopEnd run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
-                const RunIdentity& id, const StateArrays* restart, const SubMesh* part, CutHistory* cuts) {
+LoopEnd run_dim(const Case& c, std::shared_ptr<const HostMesh> mesh, const std::string& out,
+                const RunOptions& opt, const RunIdentity& id, const StateArrays* restart, const SubMesh* part,
+                CutHistory* cuts) {
   RunLoop<D> run(c, std::move(mesh), out, opt, id, restart, part, cuts);
   return run.run();
 }
 
 template class RunLoop<2>;
 template class RunLoop<3>;
-template LoopEnd run_dim<2>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
+template LoopEnd run_dim<2>(const Case&, std::shared_ptr<const HostMesh>, const std::string&, const RunOptions&,
                             const RunIdentity&, const StateArrays*, const SubMesh*, CutHistory*);
-template LoopEnd run_dim<3>(const Case&, HostMesh&&, const std::string&, const RunOptions&,
+template LoopEnd run_dim<3>(const Case&, std::shared_ptr<const HostMesh>, const std::string&, const RunOptions&,
                             const RunIdentity&, const StateArrays*, const SubMesh*, CutHistory*);
 
 }  // namespace fdem

@@ -56,8 +56,9 @@ class RunLoop {
   // it; mesh is then the whole mesh on process 0 (outputs, counts) and an empty one with the
   // dimension and body count on the others. cuts: that run's cuts of the parts anew so far, owned
   // by the run over processes (solver/run.cpp); restart is &cuts->state when the parts begin at a
-  // cut. Both null: one process.
-  RunLoop(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
+  // cut. Both null: one process. The loop lets go of the mesh once it is set up (the caller may
+  // keep it: process 0 of a run that cuts its parts anew).
+  RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const std::string& out, const RunOptions& opt,
           const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr,
           CutHistory* cuts = nullptr);
   // Runs to the end time (or the step limit, or the stop rule, or a signal; the summary written to
@@ -92,7 +93,7 @@ class RunLoop {
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
-  std::unique_ptr<HostMesh> mesh_;  // null after the set-up
+  std::shared_ptr<const HostMesh> mesh_;  // null after the set-up
   nlohmann::json counts_;           // mesh_report of the mesh, for summary.json
   const std::string out_;
   const RunOptions& opt_;
@@ -137,7 +138,7 @@ class RunLoop {
 
 // run_case's run of a prepared case in dimension D (the arguments: RunLoop's).
 template <int D>
-LoopEnd run_dim(const Case& c, HostMesh&& mesh, const std::string& out, const RunOptions& opt,
+LoopEnd run_dim(const Case& c, std::shared_ptr<const HostMesh> mesh, const std::string& out, const RunOptions& opt,
                 const RunIdentity& id, const StateArrays* restart, const SubMesh* part = nullptr,
                 CutHistory* cuts = nullptr);
 

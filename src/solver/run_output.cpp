@@ -1,6 +1,7 @@
 #include "solver/run_output.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -9,6 +10,7 @@
 
 #include "common/error.hpp"
 #include "solver/fragment_bodies.hpp"
+#include "solver/fragment_parts.hpp"
 #include "solver/interface_materials.hpp"
 #include "solver/model_builder.hpp"
 
@@ -84,49 +86,6 @@ std::vector<std::string> fragment_columns() {
   return fc;
 }
 
-// The ten largest fragments where their material was at the start: share of the mass, the
-// mass-weighted centroid and the box of their elements' centroids in the reference configuration
-// (a fracture pattern is read from these: halves split through an axis, caps, cones).
-// frag: each element's fragment id; masses: each fragment's.
-nlohmann::json largest_fragments(const std::vector<int>& frag, const std::vector<double>& masses,
-                                 const std::vector<double>& emass, const std::vector<double>& centroid, int dim) {
-  std::vector<int> order(masses.size());
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  std::sort(order.begin(), order.end(), [&masses](int a, int b) { return masses[a] > masses[b]; });
-  if (order.size() > 10) order.resize(10);
-  std::vector<int> rank(masses.size(), -1);
-  for (size_t r = 0; r < order.size(); ++r) rank[order[r]] = static_cast<int>(r);
-  const size_t n = order.size(), d = static_cast<size_t>(dim);
-  std::vector<double> m(n, 0.0), c(n * d, 0.0), lo(n * d, std::numeric_limits<double>::infinity()),
-      hi(n * d, -std::numeric_limits<double>::infinity());
-  double total = 0;
-  for (size_t e = 0; e < frag.size(); ++e) {
-    total += emass[e];
-    const int r = frag[e] >= 0 ? rank[frag[e]] : -1;
-    if (r < 0) continue;
-    m[r] += emass[e];
-    for (size_t k = 0; k < d; ++k) {
-      const double x = centroid[e * d + k];
-      c[r * d + k] += emass[e] * x;
-      lo[r * d + k] = std::min(lo[r * d + k], x);
-      hi[r * d + k] = std::max(hi[r * d + k], x);
-    }
-  }
-  nlohmann::json out = nlohmann::json::array();
-  for (size_t r = 0; r < n; ++r) {
-    std::vector<double> cr(d), lr(d), hr(d);
-    for (size_t k = 0; k < d; ++k) {
-      cr[k] = m[r] > 0 ? c[r * d + k] / m[r] : 0.0;
-      lr[k] = lo[r * d + k];
-      hr[k] = hi[r * d + k];
-    }
-    out.push_back({{"fraction", total > 0 ? m[r] / total : 0.0},
-                   {"reference_centroid", cr},
-                   {"reference_box_min", lr},
-                   {"reference_box_max", hr}});
-  }
-  return out;
-}
 }  // namespace
 
 template <int D>
@@ -155,65 +114,23 @@ void RunFragments<D>::open_csv(const RunState* restart, const std::string& file,
 }
 
 template <int D>
-RunFragments<D>::RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out,
-                              bool writes, const RunState* restart, const std::string& file)
-    : comm_(&sim.parts().comm()), out_(out) {
+RunFragments<D>::RunFragments(const Simulation<D>& sim, const std::string& out, bool writes,
+                              const RunState* restart, const std::string& file)
+    : parts_(std::make_unique<PartFragments<D>>(sim)), comm_(&sim.parts().comm()), out_(out) {
   open_csv(restart, file, writes);
-  if (!writes) return;
-  // the whole mesh's elements, masses and interfaces (the arrays the labelling reads)
-  whole_ = std::make_unique<Model<D>>();
-  Model<D>& w = *whole_;
-  w.nn = whole.num_nodes();
-  w.ne = whole.num_elems();
-  w.ni = whole.num_ifaces();
-  w.thickness = sim.m.thickness;
-  const MaterialTable mats = build_materials<D>(c, whole, w);
-  build_elements<D>(c, whole, mats, w);
-  w.iface = Kokkos::View<int* [2 * D]>("fdem::fragments::iface", w.ni);
-  w.ihist = Kokkos::View<double* [D][kPointHistory]>("fdem::fragments::ihist", w.ni);
-  // reference positions: the per-body statistics (several initial bodies) place the fragments
-  w.X = Kokkos::View<double* [D]>("fdem::fragments::X", w.nn);
-  auto Xh = Kokkos::create_mirror_view(w.X);
-  for (int n = 0; n < w.nn; ++n)
-    for (int k = 0; k < D; ++k) Xh(n, k) = whole.X[static_cast<size_t>(n) * D + k];
-  Kokkos::deep_copy(w.X, Xh);
-  auto fc = Kokkos::create_mirror_view(w.iface);
-  for (int q = 0; q < w.ni; ++q)
-    for (int k = 0; k < 2 * D; ++k) fc(q, k) = whole.ifaces[static_cast<size_t>(q) * 2 * D + k];
-  Kokkos::deep_copy(w.iface, fc);
-  analysis_ = std::make_unique<FragmentAnalysis<D>>(w);
-  bodies_ = initial_bodies<D>(w, body_);
-}
-
-// Every process's counted interfaces' histories (with their whole-mesh indices) into whole_ on
-// process 0.
-template <int D>
-void RunFragments<D>::gather_histories(const Simulation<D>& sim) {
-  const size_t own = static_cast<size_t>(sim.m.owned_ifaces()), w = kPointHistory * D;
-  auto h = Kokkos::create_mirror_view(sim.m.ihist);
-  Kokkos::deep_copy(h, sim.m.ihist);
-  std::vector<double> rows(own * w);
-  for (size_t q = 0; q < own; ++q)
-    for (int k = 0; k < D; ++k)
-      for (int a = 0; a < kPointHistory; ++a) rows[q * w + kPointHistory * k + a] = h(q, k, a);
-  const std::vector<double> all =
-      gather_rows(*comm_, rows.data(), own, w, sim.ifaces_global(), whole_ ? static_cast<size_t>(whole_->ni) : 0);
-  if (!whole_) return;
-  auto wh = Kokkos::create_mirror_view(whole_->ihist);
-  for (int q = 0; q < whole_->ni; ++q)
-    for (int k = 0; k < D; ++k)
-      for (int a = 0; a < kPointHistory; ++a) wh(q, k, a) = all[q * w + kPointHistory * k + a];
-  Kokkos::deep_copy(whole_->ihist, wh);
 }
 
 template <int D>
 const FragmentStats& RunFragments<D>::now(const Simulation<D>& sim) {
   if (step_ != sim.step_count) {
-    if (comm_) gather_histories(sim);
-    if (analysis_) analysis_->compute(whole_ ? *whole_ : sim.m);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (parts_) parts_->compute(sim);  // (collective)
+    if (analysis_) analysis_->compute(sim.m);
+    label_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    ++labellings_;
     step_ = sim.step_count;
   }
-  return analysis_ ? analysis_->last() : none_;
+  return parts_ ? parts_->last() : analysis_->last();
 }
 
 template <int D>
@@ -229,16 +146,42 @@ void RunFragments<D>::write_row(const Simulation<D>& sim, const Energies& e) {
 }
 
 template <int D>
-void RunFragments<D>::element_ids(const Simulation<D>& sim, std::vector<int>& ids) {
+void RunFragments<D>::element_ids(const Simulation<D>& sim, std::vector<int>& ids, bool whole) {
   now(sim);
-  if (analysis_) analysis_->element_ids(ids);  // the whole mesh's, on process 0 of several
+  if (analysis_) return analysis_->element_ids(ids);
+  parts_->element_ids(ids);  // (collective) the own elements'
+  if (!whole) return;
+  std::vector<double> v(ids.begin(), ids.end());
+  sim.parts().gather_to_root(v, ids.size(), 1, sim.parts().elem_global(), sim.parts().whole_elems());
+  ids.assign(v.begin(), v.end());  // process 0: the whole mesh's; the others: none
 }
 
 template <int D>
 nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
   const FragmentStats& fs = now(sim);
-  if (!analysis_) return nullptr;  // a process that does not write
-  std::vector<double> masses = analysis_->masses();
+  nlohmann::json largest, pb;
+  std::vector<double> masses;
+  if (parts_) {
+    typename PartFragments<D>::Ends ends = parts_->ends(sim);  // (collective)
+    if (!sim.parts().root()) return nullptr;  // a process that does not write
+    masses = parts_->masses();
+    largest = std::move(ends.largest);
+    if (!ends.bodies.empty()) pb = bodies_summary(ends.bodies);
+  } else {
+    masses = analysis_->masses();
+    std::vector<int> frag;
+    analysis_->element_ids(frag);
+    std::vector<double> emass, centroid;
+    element_mass_centroids<D>(sim.m, emass, centroid);
+    FragmentPieces pieces;
+    for (size_t e = 0; e < frag.size(); ++e) {
+      double mc[3];
+      for (int k = 0; k < 3; ++k) mc[k] = emass[e] * centroid[3 * e + k];
+      pieces.add(frag[e], emass[e], mc, &centroid[3 * e], &centroid[3 * e]);
+    }
+    largest = largest_fragments(pieces, masses, D);
+    if (bodies_ >= 2) pb = bodies_summary(body_fragments(body_, bodies_, frag, masses, emass, centroid));
+  }
   std::sort(masses.begin(), masses.end(), [](double a, double b) { return a > b; });
   std::vector<double> top;
   for (size_t i = 0; i < masses.size() && i < 10; ++i)
@@ -256,12 +199,6 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
     at_least.push_back(x);
     held.push_back(fs.total_mass > 0 ? sum / fs.total_mass : 0.0);
   }
-  std::vector<int> frag;
-  element_ids(sim, frag);
-  std::vector<double> emass, centroid;
-  element_mass_centroids<D>(whole_ ? *whole_ : sim.m, emass, centroid);
-  const nlohmann::json largest = largest_fragments(frag, analysis_->masses(), emass, centroid, D);
-  nlohmann::json pb = per_body(frag, emass, centroid);
   nlohmann::json out = {
       {"count", fs.count},
       {"largest_fraction", fs.largest_fraction},
@@ -274,16 +211,18 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
        {{"bin_lower_edge", edges},
         {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
         {"mass_fraction", std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}},
-      {"cumulative_mass", {{"fragment_fraction_at_least", at_least}, {"mass_fraction", held}}}};
+      {"cumulative_mass", {{"fragment_fraction_at_least", at_least}, {"mass_fraction", held}}},
+      {"labelling",
+       {{"count", labellings_},
+        {"wall_seconds", label_seconds_},
+        {"gathered_bytes_last", parts_ ? parts_->gathered_bytes() : 0.0}}}};
   if (!pb.is_null()) out["per_body"] = pb;
   return out;
 }
 
+// More than one initial body: out/bodies.csv and summary.json fragments.per_body.
 template <int D>
-nlohmann::json RunFragments<D>::per_body(const std::vector<int>& frag, const std::vector<double>& emass,
-                                         const std::vector<double>& centroid) {
-  if (bodies_ < 2 || !analysis_) return nullptr;  // (over several processes: process 0's)
-  const auto b = body_fragments(body_, bodies_, frag, analysis_->masses(), emass, centroid);
+nlohmann::json RunFragments<D>::bodies_summary(const std::vector<BodyFragments>& b) const {
   write_bodies_csv(out_ + "/bodies.csv", b, D);
   return body_fragments_summary(b, out_ + "/bodies.csv");
 }
@@ -340,7 +279,7 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   last_step_ = sim.step_count;
   const bool own_rows = parallel(sim);
   sim.download(x_, u_, v_, stress_, damage_, !own_rows);  // else gathered on process 0
-  if (frag) frag->element_ids(sim, fragment_);  // (over several processes: on process 0)
+  if (frag) frag->element_ids(sim, fragment_, !own_rows);  // (collective)
   if (own_rows) {
     if (writer_) writer_->close_file();  // (after its /mesh; a no-op from the second frame on)
     const auto w = sim.whole_rows();
@@ -363,7 +302,7 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
     p.stress = stress_.data();
     p.damage = damage_.data();
     p.has_fragment = frag != nullptr;
-    p.fragment = frag && writer_ ? fragment_.data() : nullptr;
+    p.fragment = frag ? fragment_.data() : nullptr;
     frames_->write(out_, p);
     if (writer_) writer_->frame_written(sim.t, sim.step_count, frag != nullptr);
     return;

@@ -3,6 +3,7 @@
 // (OutputSchedule), snapshots (RunSnapshots) and the fragment analysis (RunFragments).
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -12,6 +13,7 @@
 #include "io/snapshot_parallel.hpp"
 #include "mesh/mesh.hpp"
 #include "solver/fragment_analysis.hpp"
+#include "solver/fragment_parts.hpp"
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
 
@@ -58,30 +60,35 @@ class RunFragments {
   // `file` when its rows do not fit the columns.
   RunFragments(const Model<D>& m, const std::string& out, const RunState* restart = nullptr,
                const std::string& file = "");
-  // A run over several processes (sim.parts().many()): `whole` is the whole mesh. Process 0 (`writes`)
-  // keeps the whole mesh's elements and interfaces and labels its fragments from every process's
-  // interface histories, gathered at each call below (which every process makes, at the same
-  // steps); the others only send theirs. restart: as above.
-  RunFragments(const Simulation<D>& sim, const Case& c, const HostMesh& whole, const std::string& out, bool writes,
-               const RunState* restart = nullptr, const std::string& file = "");
+  // A run over several processes (sim.parts().many()): each process labels its part, process 0
+  // joins them (solver/fragment_parts.hpp) and alone writes (`writes`). Every process makes every
+  // call below, at the same steps. restart: as above.
+  RunFragments(const Simulation<D>& sim, const std::string& out, bool writes, const RunState* restart = nullptr,
+               const std::string& file = "");
   // Statistics of the present state (labelled once per step).
   const FragmentStats& now(const Simulation<D>& sim);
-  // More than one initial body: writes out/bodies.csv and returns fragments.per_body (else null);
-  // from each element's fragment id, mass and reference centroid (summary() takes them once).
-  nlohmann::json per_body(const std::vector<int>& frag, const std::vector<double>& emass,
-                          const std::vector<double>& centroid);
   // The row of the instant `e` of the last history row (the present state).
   void write_row(const Simulation<D>& sim, const Energies& e);
-  void element_ids(const Simulation<D>& sim, std::vector<int>& ids);
+  // Every element's fragment id: one process, its own; several, the own elements' (whole = false)
+  // or the whole mesh's gathered on process 0 (whole = true; the others get none).
+  void element_ids(const Simulation<D>& sim, std::vector<int>& ids, bool whole = true);
   nlohmann::json summary(const Simulation<D>& sim);
   void save(RunState& s) const { s.fragment_rows = rows_; }
+  // The labellings so far and their wall time (summary.json fragments.labelling), and those of the
+  // parts before a cut to count on from.
+  std::pair<long, double> labelling() const { return {labellings_, label_seconds_}; }
+  void count_from(long labellings, double seconds) {
+    labellings_ += labellings;
+    label_seconds_ += seconds;
+  }
 
  private:
-  std::unique_ptr<Model<D>> whole_;  // over several processes, on process 0: the whole mesh
-  std::unique_ptr<FragmentAnalysis<D>> analysis_;  // null on the processes that do not write
+  std::unique_ptr<PartFragments<D>> parts_;       // over several processes
+  std::unique_ptr<FragmentAnalysis<D>> analysis_;  // one process
+  long labellings_ = 0;       // the labellings so far (one per step at most) and their wall time
+  double label_seconds_ = 0;  // (over several processes: with the gathering)
   const Comm* comm_ = nullptr;
-  FragmentStats none_;
-  void gather_histories(const Simulation<D>& sim);
+  nlohmann::json bodies_summary(const std::vector<BodyFragments>& b) const;
   void open_csv(const RunState* restart, const std::string& file, bool writes);
   std::string out_;
   std::vector<int> body_;  // initial body of every element (fragment_bodies.hpp)

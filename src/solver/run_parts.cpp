@@ -40,8 +40,8 @@ class OnePart final : public RunParts<D> {
 };
 
 // A part of a run over processes: the whole run's state gathered on process 0 and given back to
-// the parts (solver/whole_state.hpp), checked after every cut; process 0 labels the whole mesh's
-// fragments from every part's interface histories.
+// the parts (solver/whole_state.hpp), checked after every cut; each process labels the fragments
+// of its part and process 0 joins them (solver/fragment_parts.hpp).
 template <int D>
 class ManyParts final : public RunParts<D> {
  public:
@@ -72,9 +72,9 @@ class ManyParts final : public RunParts<D> {
   long long checkpoint_access() const override {
     return gather_outputs() ? -1 : sim_.parts().comm().h5_parallel_access();
   }
-  std::unique_ptr<RunFragments<D>> fragments(const Case& c, const HostMesh& mesh, const std::string& out,
+  std::unique_ptr<RunFragments<D>> fragments(const Case&, const HostMesh&, const std::string& out,
                                              const RunState* restart, const std::string& file) const override {
-    return std::make_unique<RunFragments<D>>(sim_, c, mesh, out, writes_, restart, file);
+    return std::make_unique<RunFragments<D>>(sim_, out, writes_, restart, file);
   }
   // A signal reaches each process at its own moment: they look together, every kInterruptPoll
   // steps, and stop at the same step if any has one (else some would wait forever for the others'

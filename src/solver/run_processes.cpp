@@ -105,8 +105,9 @@ class ProcessesRun {
   double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
   std::vector<std::vector<char>> packed_;  // process 0: every process's part, packed for sending
   SubMesh part_;                           // this process's part
-  // process 0, with contact: the whole mesh, to cut the parts anew, and the contact zones' reach
-  std::unique_ptr<HostMesh> whole_;
+  // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up),
+  // and the contact zones' reach
+  std::shared_ptr<const HostMesh> whole_;
   double whole_reach_ = 0;
   std::vector<int> elem_part_at_start_;  // process 0: the parts this run starts with
   CutHistory cuts_;
@@ -174,8 +175,8 @@ void ProcessesRun::first_parts() {
   check_every_part_filled(elem_part);
   packed_ = packed_parts(mesh, elem_part, comm_.size(), reach, at);
   elem_part_at_start_ = std::move(elem_part);
-  if (reach > 0) {
-    whole_ = std::make_unique<HostMesh>(mesh);  // (kept for cutting the parts anew during the run)
+  if (reach > 0) {  // kept for cutting the parts anew during the run
+    whole_ = std::make_shared<const HostMesh>(std::move(prep_.mesh));
     whole_reach_ = reach;
   }
 }
@@ -261,9 +262,10 @@ void ProcessesRun::take_restart_cuts() {
   from_ = prep_.checkpoint();
 }
 
-// This process's part run from from_ until the run ends or its parts are to be cut anew.
+// This process's part run from from_ until the run ends or its parts are to be cut anew. The run
+// loop takes process 0's whole mesh (kept there when it cuts the parts anew) or the others' empty one.
 LoopEnd ProcessesRun::run_part() {
-  HostMesh& mesh = prep_.mesh;  // (taken by the run loop)
+  std::shared_ptr<const HostMesh> mesh = whole_ ? whole_ : std::make_shared<const HostMesh>(std::move(prep_.mesh));
   return c_.dim == 2 ? run_dim<2>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_)
                      : run_dim<3>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_);
 }
@@ -310,7 +312,6 @@ std::vector<std::vector<char>> ProcessesRun::cut_anew() {
   packed_ = packed_parts(*whole_, elem_part, comm_.size(), whole_reach_, &x);
   const std::vector<char> bytes = pack_state(cuts_.state);
   std::vector<std::vector<char>> states(static_cast<size_t>(comm_.size()), bytes);
-  prep_.mesh = *whole_;
   return states;
 }
 

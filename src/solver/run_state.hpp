@@ -77,6 +77,10 @@ struct CutHistory {
   // gathered, the partition, the parts and state sent, the new parts set up and checked.
   double cut_seconds = 0;
   std::vector<int> cut_parts;
+  // The fragment labellings of the parts before the last cut and their wall time (RunFragments:
+  // summary.json fragments.labelling counts the whole invocation's).
+  long labellings = 0;
+  double label_seconds = 0;
 
   // Checkpoint (process 0's whole state): the cuts, rebalances and elements moved so far, and the
   // parts of the last cut when there was one. load takes the counts of a checkpoint that has them
