@@ -211,13 +211,16 @@ nlohmann::json RunFragments<D>::summary(const Simulation<D>& sim) {
        {{"bin_lower_edge", edges},
         {"count", std::vector<double>(fs.bin_count.begin(), fs.bin_count.end())},
         {"mass_fraction", std::vector<double>(fs.bin_mass_fraction.begin(), fs.bin_mass_fraction.end())}}},
-      {"cumulative_mass", {{"fragment_fraction_at_least", at_least}, {"mass_fraction", held}}},
-      {"labelling",
-       {{"count", labellings_},
-        {"wall_seconds", label_seconds_},
-        {"gathered_bytes_last", parts_ ? parts_->gathered_bytes() : 0.0}}}};
+      {"cumulative_mass", {{"fragment_fraction_at_least", at_least}, {"mass_fraction", held}}}};
   if (!pb.is_null()) out["per_body"] = pb;
   return out;
+}
+
+template <int D>
+nlohmann::json RunFragments<D>::labelling_report() const {
+  return {{"count", labellings_},
+          {"wall_seconds", label_seconds_},
+          {"gathered_bytes_last", parts_ ? parts_->gathered_bytes() : 0.0}};
 }
 
 // More than one initial body: out/bodies.csv and summary.json fragments.per_body.

@@ -73,6 +73,9 @@ class RunFragments {
   // or the whole mesh's gathered on process 0 (whole = true; the others get none).
   void element_ids(const Simulation<D>& sim, std::vector<int>& ids, bool whole = true);
   nlohmann::json summary(const Simulation<D>& sim);
+  // summary.json fragment_labelling: the labellings of this invocation, their wall time (over
+  // several processes: with the exchange and the gathering) and the bytes of the last gathering.
+  nlohmann::json labelling_report() const;
   void save(RunState& s) const { s.fragment_rows = rows_; }
   // The labellings so far and their wall time (summary.json fragments.labelling), and those of the
   // parts before a cut to count on from.

@@ -239,6 +239,7 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
   if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct, sim);
   if (frag) summary["fragments"] = frag->summary(sim);
+  if (frag) summary["fragment_labelling"] = frag->labelling_report();
   summary["results"] = results_report(c, sim, history);
   if (r.checkpoint_every > 0 || r.restart || r.checkpoints_written > 0)
     summary["checkpoint"] = checkpoint_report(r);
