@@ -80,6 +80,10 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
 std::vector<char> pack_submesh(const SubMesh& s);
 SubMesh unpack_submesh(const std::vector<char>& bytes);
 // The same for a run's state (a re-cut sends the whole state to every process).
+// A whole mesh as bytes and back (process 0 keeps the mesh it cuts the parts from in a file
+// between the cuts: solver/run_processes.cpp).
+std::vector<char> pack_mesh(const HostMesh& m);
+HostMesh unpack_mesh(const std::vector<char>& bytes);
 std::vector<char> pack_state(const StateArrays& s);
 StateArrays unpack_state(const std::vector<char>& bytes);
 

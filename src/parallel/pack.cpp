@@ -102,14 +102,8 @@ class Unpacker {
 };
 
 // Both directions over one list of the fields (f: Packer::put or Unpacker::get).
-template <class S, class F>
-void submesh_fields(S& s, F&& f) {
-  f(s.part);
-  f(s.parts);
-  f(s.whole_nodes);
-  f(s.whole_elems);
-  f(s.whole_ifaces);
-  auto& m = s.mesh;
+template <class M, class F>
+void mesh_fields(M& m, F&& f) {
   f(m.dim);
   f(m.X);
   f(m.elems);
@@ -132,6 +126,16 @@ void submesh_fields(S& s, F&& f) {
   f(m.pieces);
   f(m.whole_min_size);
   f(m.iface_ids);
+}
+
+template <class S, class F>
+void submesh_fields(S& s, F&& f) {
+  f(s.part);
+  f(s.parts);
+  f(s.whole_nodes);
+  f(s.whole_elems);
+  f(s.whole_ifaces);
+  mesh_fields(s.mesh, f);
   f(s.contact_reach);
   f(s.cut_x);
   f(s.node_global);
@@ -149,6 +153,20 @@ std::vector<char> pack_submesh(const SubMesh& s) {
   Packer p;
   submesh_fields(s, [&](const auto& v) { p.put(v); });
   return std::move(p.bytes);
+}
+
+std::vector<char> pack_mesh(const HostMesh& m) {
+  Packer p;
+  mesh_fields(m, [&](const auto& v) { p.put(v); });
+  return std::move(p.bytes);
+}
+
+HostMesh unpack_mesh(const std::vector<char>& bytes) {
+  HostMesh m;
+  Unpacker u(bytes);
+  mesh_fields(m, [&](auto& v) { u.get(v); });
+  if (!u.done()) throw InputError("unpack_mesh: data left over (damaged)");
+  return m;
 }
 
 std::vector<char> pack_state(const StateArrays& s) {

@@ -30,7 +30,8 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
       cuts_(cuts ? cuts : &no_cuts_),
       wall0_(Clock::now()),
       loop0_(wall0_),
-      sim_(c, model_mesh(*mesh_, part)),
+      snaps_(early_snapshots(part)),
+      sim_(c, model_source(part)),
       boundary_nodes_(sim_.m.nb),
       schedule_(c, opt.checkpoint_every >= 0 ? opt.checkpoint_every : c.checkpoint_every) {
   parts_ = make_run_parts(sim_, opt, part, *cuts_, restart);
@@ -38,17 +39,17 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   schedule_.check_checkpoint_interval(
       sim_.dt, opt.checkpoint_every >= 0 ? "--checkpoint-every" : "output.checkpoint_every", c.file);
   setup_times::Phase outputs("output_setup");  // with the first snapshot (run())
-  counts_ = whole_counts();
+  if (!part) counts_ = whole_counts(part);  // (over processes: before the model)
   whole_ifaces_ = counts_.at("interfaces").get<long>();
   if (restart) parts_->load(*restart);
-  history_ = std::make_unique<HistoryTable<D>>(c, *mesh_, sim_, history_part(part));
+  history_ = std::make_unique<HistoryTable<D>>(c, part ? part->mesh : *mesh_, sim_, history_part(part));
   if (restart) {
     restore(*restart);
   } else {
     if (writes_) history_->open(out, false);
-    if (fragments_on()) frag_ = parts_->fragments(c, *mesh_, out, nullptr, "");
+    if (fragments_on()) frag_ = parts_->fragments(out, nullptr, "");
     if (frag_) frag_->count_from(cuts_->labellings, cuts_->label_seconds);
-    snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
+    if (!snaps_) snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
@@ -62,10 +63,28 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
 // For summary.json and the checkpoint header. A process of several that holds no whole mesh (not
 // process 0) takes the counts from its part, for the summary it does not write.
 template <int D>
-nlohmann::json RunLoop<D>::whole_counts() const {
-  if (writes_) return mesh_report(*mesh_);
-  const Parts<D>& p = sim_.parts();
-  return {{"nodes", p.whole_nodes()}, {"elements", p.whole_elems()}, {"interfaces", p.whole_ifaces()}};
+nlohmann::json RunLoop<D>::whole_counts(const SubMesh* part) const {
+  if (!part || opt_.comm->rank() == 0) return mesh_report(*mesh_);
+  return {{"nodes", part->whole_nodes}, {"elements", part->whole_elems}, {"interfaces", part->whole_ifaces}};
+}
+
+template <int D>
+std::unique_ptr<RunSnapshots<D>> RunLoop<D>::early_snapshots(const SubMesh* part) const {
+  if (!part) return nullptr;
+  setup_times::Phase outputs("output_setup");
+  const bool root = opt_.comm->rank() == 0;
+  if (!restart_) return std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, nullptr, root);
+  RunState s;  // (the snapshots' entries of the checkpoint)
+  s.load(*restart_, static_cast<int>(c_.platens.size()));
+  return std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, root);
+}
+
+template <int D>
+const HostMesh& RunLoop<D>::model_source(const SubMesh* part) {
+  if (!part) return *mesh_;
+  counts_ = whole_counts(part);
+  mesh_.reset();  // (process 0: freed here unless the run over processes keeps it for its cuts)
+  return part->mesh;
 }
 
 // The run loop's state from the checkpoint (every process of several: the same); history.csv,
@@ -81,9 +100,9 @@ void RunLoop<D>::restore(const StateArrays& r) {
   ckpt_wall_ = s.checkpoint_seconds;
   ckpt_written_ = static_cast<long>(s.checkpoints_written);
   if (writes_) history_->open(out_, true);
-  if (fragments_on()) frag_ = parts_->fragments(c_, *mesh_, out_, &s, r.file);
+  if (fragments_on()) frag_ = parts_->fragments(out_, &s, r.file);
   if (frag_) frag_->count_from(cuts_->labellings, cuts_->label_seconds);
-  snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
+  if (!snaps_) snaps_ = std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, &s, writes_);
 }
 
 template <int D>

@@ -68,7 +68,13 @@ class RunLoop {
  private:
   using Clock = std::chrono::steady_clock;
   // The whole mesh's counts (mesh_report on the process that holds it, else the part's).
-  nlohmann::json whole_counts() const;
+  nlohmann::json whole_counts(const SubMesh* part) const;
+  // A run over processes: the snapshots set up from process 0's whole mesh before the model is
+  // built (one process: null, they are set up after it).
+  std::unique_ptr<RunSnapshots<D>> early_snapshots(const SubMesh* part) const;
+  // The mesh the model is built from: one process's whole mesh, or the part, and then the whole
+  // mesh is let go of (process 0's peak holds the whole mesh or its model, not both).
+  const HostMesh& model_source(const SubMesh* part);
   void restore(const StateArrays& r);
   void announce() const;
   void step(bool row, bool check);
@@ -93,7 +99,7 @@ class RunLoop {
   nlohmann::json finish(const std::string& stop_reason, double loop_wall);
 
   const Case& c_;
-  std::shared_ptr<const HostMesh> mesh_;  // null after the set-up
+  std::shared_ptr<const HostMesh> mesh_;  // null after the set-up (over processes: from the model's build)
   nlohmann::json counts_;           // mesh_report of the mesh, for summary.json
   const std::string out_;
   const RunOptions& opt_;
@@ -103,6 +109,7 @@ class RunLoop {
   CutHistory* const cuts_;  // the run over processes' cuts, or no_cuts_
   const Clock::time_point wall0_;
   Clock::time_point loop0_;
+  std::unique_ptr<RunSnapshots<D>> snaps_;  // (over processes: set up before the model)
   // A part that began at a cut (began_at_cut()): its set-up's wall time, from the construction to
   // the loop's start (a share of the cut's time; 0 otherwise).
   double cut_setup_seconds() const;
@@ -112,7 +119,6 @@ class RunLoop {
   OutputSchedule schedule_;
   std::unique_ptr<HistoryTable<D>> history_;
   std::unique_ptr<RunFragments<D>> frag_;  // null without fragment analysis
-  std::unique_ptr<RunSnapshots<D>> snaps_;
   std::unique_ptr<Progress> progress_;
   // wall times of the processes before this one (restart), checkpoint writing
   double prior_wall_ = 0, prior_loop_wall_ = 0, ckpt_wall_ = 0;

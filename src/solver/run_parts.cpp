@@ -25,8 +25,8 @@ class OnePart final : public RunParts<D> {
     return true;
   }
   long long checkpoint_access() const override { return -1; }
-  std::unique_ptr<RunFragments<D>> fragments(const Case&, const HostMesh&, const std::string& out,
-                                             const RunState* restart, const std::string& file) const override {
+  std::unique_ptr<RunFragments<D>> fragments(const std::string& out, const RunState* restart,
+                                             const std::string& file) const override {
     return std::make_unique<RunFragments<D>>(sim_.m, out, restart, file);
   }
   long interrupt_poll() const override { return 1; }
@@ -72,8 +72,8 @@ class ManyParts final : public RunParts<D> {
   long long checkpoint_access() const override {
     return gather_outputs() ? -1 : sim_.parts().comm().h5_parallel_access();
   }
-  std::unique_ptr<RunFragments<D>> fragments(const Case&, const HostMesh&, const std::string& out,
-                                             const RunState* restart, const std::string& file) const override {
+  std::unique_ptr<RunFragments<D>> fragments(const std::string& out, const RunState* restart,
+                                             const std::string& file) const override {
     return std::make_unique<RunFragments<D>>(sim_, out, writes_, restart, file);
   }
   // A signal reaches each process at its own moment: they look together, every kInterruptPoll

@@ -37,8 +37,8 @@ class RunParts {
   // The file access of a checkpoint written by every process, each its own rows (the parallel
   // HDF5); -1: one file written by the process that writes.
   virtual long long checkpoint_access() const = 0;
-  virtual std::unique_ptr<RunFragments<D>> fragments(const Case& c, const HostMesh& mesh, const std::string& out,
-                                                     const RunState* restart, const std::string& file) const = 0;
+  virtual std::unique_ptr<RunFragments<D>> fragments(const std::string& out, const RunState* restart,
+                                                     const std::string& file) const = 0;
   // Every how many steps the processes look together for a signal that asks them to stop.
   virtual long interrupt_poll() const = 0;
   // What the message of an interrupted run adds to its restart command, and a line on its exit

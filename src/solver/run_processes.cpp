@@ -11,6 +11,9 @@
 #include <cstdlib>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
+
+#include <unistd.h>
 
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
@@ -69,6 +72,44 @@ std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vec
   return out;
 }
 
+// Process 0 of a run with contact: the whole mesh it cuts the parts anew from, kept between the
+// cuts in a temporary file rather than in memory beside the model (written once: the mesh does not
+// change; read back at each cut). The file is in TMPDIR (else /tmp) and unlinked at once, so it is
+// gone when the process ends, however it ends.
+class KeptMesh {
+ public:
+  KeptMesh() = default;
+  KeptMesh(const KeptMesh&) = delete;
+  KeptMesh& operator=(const KeptMesh&) = delete;
+  ~KeptMesh() {
+    if (f_) std::fclose(f_);
+  }
+  bool kept() const { return f_ != nullptr; }
+  void write(const HostMesh& m) {
+    const std::vector<char> b = pack_mesh(m);
+    const char* t = std::getenv("TMPDIR");
+    std::string path = std::string(t && *t ? t : "/tmp") + "/fdem-whole-mesh-XXXXXX";
+    const int fd = mkstemp(path.data());
+    if (fd >= 0) unlink(path.c_str());
+    f_ = fd >= 0 ? fdopen(fd, "w+b") : nullptr;
+    if (!f_ || std::fwrite(b.data(), 1, b.size(), f_) != b.size() || std::fflush(f_) != 0)
+      throw std::runtime_error("cannot keep the whole mesh (" + std::to_string(b.size()) +
+                               " bytes) in a temporary file in " + path.substr(0, path.rfind('/')) +
+                               " for cutting the parts anew: set TMPDIR to a folder with room");
+    bytes_ = b.size();
+  }
+  HostMesh read() const {
+    std::vector<char> b(bytes_);
+    if (std::fseek(f_, 0, SEEK_SET) != 0 || std::fread(b.data(), 1, b.size(), f_) != b.size())
+      throw std::runtime_error("cannot read back the whole mesh kept in a temporary file for cutting the parts anew");
+    return unpack_mesh(b);
+  }
+
+ private:
+  std::FILE* f_ = nullptr;
+  size_t bytes_ = 0;
+};
+
 // A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
 // refused, naming the key. Process 0 meshes the case, partitions and decomposes it and sends each
 // process its part (the others never hold the whole mesh); every process runs its part; process 0
@@ -105,9 +146,10 @@ class ProcessesRun {
   double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
   std::vector<std::vector<char>> packed_;  // process 0: every process's part, packed for sending
   SubMesh part_;                           // this process's part
-  // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up),
-  // and the contact zones' reach
+  // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up;
+  // kept_ holds it during the run), and the contact zones' reach
   std::shared_ptr<const HostMesh> whole_;
+  KeptMesh kept_;
   double whole_reach_ = 0;
   std::vector<int> elem_part_at_start_;  // process 0: the parts this run starts with
   CutHistory cuts_;
@@ -265,7 +307,10 @@ void ProcessesRun::take_restart_cuts() {
 // This process's part run from from_ until the run ends or its parts are to be cut anew. The run
 // loop takes process 0's whole mesh (kept there when it cuts the parts anew) or the others' empty one.
 LoopEnd ProcessesRun::run_part() {
-  std::shared_ptr<const HostMesh> mesh = whole_ ? whole_ : std::make_shared<const HostMesh>(std::move(prep_.mesh));
+  if (whole_ && !kept_.kept()) kept_.write(*whole_);
+  // (the run loop lets go of it once the snapshots are set up, before it builds the model)
+  std::shared_ptr<const HostMesh> mesh =
+      whole_ ? std::move(whole_) : std::make_shared<const HostMesh>(std::move(prep_.mesh));
   return c_.dim == 2 ? run_dim<2>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_)
                      : run_dim<3>(c_, std::move(mesh), prep_.out, opt_, prep_.id, from_, &part_, &cuts_);
 }
@@ -299,6 +344,7 @@ void ProcessesRun::record_cut(const CutRequest& cut) {
 // packed, and the whole state packed for each; the whole mesh again for the next run loop.
 std::vector<std::vector<char>> ProcessesRun::cut_anew() {
   setup_times::Phase phase("decomposition");
+  whole_ = std::make_shared<const HostMesh>(kept_.read());
   const std::vector<double>& x = cuts_.state.array("model/x", static_cast<long long>(whole_->X.size()));
   std::vector<int> elem_part = parts_by_work(x);
   if (std::getenv("FDEM_TEST_RECUT"))  // test hook (Simulation): every element to another process
