@@ -13,7 +13,8 @@ namespace fdem {
 namespace {
 
 // One process's buffer: tokens of (key, mass, count) and edges (token, process, token).
-std::vector<double> buffer(const std::vector<std::vector<double>>& tokens, const std::vector<std::vector<double>>& edges) {
+std::vector<double> buffer(const std::vector<std::vector<double>>& tokens,
+                           const std::vector<std::vector<double>>& edges) {
   std::vector<double> b = {double(tokens.size()), double(edges.size())};
   for (const auto& t : tokens) b.insert(b.end(), t.begin(), t.end());
   for (const auto& e : edges) b.insert(b.end(), e.begin(), e.end());

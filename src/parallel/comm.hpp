@@ -5,6 +5,7 @@
 // runs under mpirun on more than one process. Host only; called between kernels, never inside.
 #include <algorithm>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,6 +36,18 @@ class Comm {
   // From process 0 (parts: one buffer per process, consumed) to each process its own, into
   // `mine` (process 0's own too).
   virtual void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const = 0;
+  // The same with each process's buffer made by process 0 when it is its turn (make(r), called
+  // there only, for every process r, its own last) and freed once sent, so that process 0 holds one
+  // at a time. (This default makes them all first.)
+  virtual void scatter_each(const std::function<std::vector<char>(int)>& make, std::vector<char>& mine) const {
+    std::vector<std::vector<char>> parts;
+    if (rank() == 0) {
+      parts.resize(static_cast<size_t>(size()));
+      for (int r = 1; r < size(); ++r) parts[static_cast<size_t>(r)] = make(r);
+      parts[0] = make(0);
+    }
+    scatter_bytes(parts, mine);
+  }
   // An HDF5 file access property list (hid_t) for opening one file on every process with MPI-IO,
   // which the caller closes; -1 when the build's HDF5 is not parallel (the frames are then gathered
   // on process 0: src/solver/run_output.cpp). Collective: every process calls it.

@@ -204,6 +204,8 @@ class Decomposer {
   Decomposer(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach,
              const std::vector<double>* at);
   std::vector<SubMesh> run();
+  SubMesh part(int p);
+  PartLists lists(int q);
 
  private:
   int enode(int e, int a) const { return w_.elems[static_cast<size_t>(e) * npe_ + a]; }
@@ -211,7 +213,6 @@ class Decomposer {
   void check() const;
   void find_owners();
   void find_contact();
-  SubMesh part(int p);
   void select_items(int p, PartItems& it);
   void list_ghost_nodes(int p, PartItems& it);
   void order_elements(int p, PartItems& it) const;
@@ -220,7 +221,6 @@ class Decomposer {
   void local_mesh(const PartItems& it, SubMesh& s);
   void local_sets(int p, const PartItems& it, HostMesh& m) const;
   void exchange_lists(int p, const PartItems& it, SubMesh& s);
-  void neighbours(std::vector<SubMesh>& out);
 
   const HostMesh& w_;
   const std::vector<int>& elem_part_;
@@ -234,8 +234,10 @@ class Decomposer {
   WholeContact contact_;
   std::vector<int> emark_, imark_, nmark_;  // stamped with the part
   std::vector<int> elocal_, nlocal_, ilocal_;
-  // sends_[q][p]: q's own local nodes that p needs, in p's order
+  // sends_[q][p]: q's own local nodes that p needs, in p's order; recv_from_[p]: the parts p
+  // receives from (its part's neighbours before lists())
   std::vector<std::vector<std::vector<int>>> sends_;
+  std::vector<std::vector<int>> recv_from_;
 };
 
 Decomposer::Decomposer(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
@@ -263,6 +265,7 @@ Decomposer::Decomposer(const HostMesh& whole, const std::vector<int>& elem_part,
   nlocal_.assign(nn_, -1);
   ilocal_.assign(ni_, -1);
   sends_.assign(parts_, std::vector<std::vector<int>>(parts_));
+  recv_from_.resize(parts_);
 }
 
 // The checks of the input (InputError).
@@ -326,7 +329,7 @@ void Decomposer::find_contact() {
 std::vector<SubMesh> Decomposer::run() {
   std::vector<SubMesh> out(parts_);
   for (int p = 0; p < parts_; ++p) out[p] = part(p);
-  neighbours(out);
+  for (int q = 0; q < parts_; ++q) complete_lists(out[q], lists(q));
   return out;
 }
 
@@ -348,6 +351,7 @@ SubMesh Decomposer::part(int p) {
   local_mesh(it, s);
   local_sets(p, it, s.mesh);
   exchange_lists(p, it, s);
+  recv_from_[p] = s.neighbours;
   for (int n : it.nodes) nlocal_[n] = -1;
   for (int e : it.els) elocal_[e] = -1;
   for (int q : it.ifs) ilocal_[q] = -1;
@@ -556,32 +560,48 @@ void Decomposer::exchange_lists(int p, const PartItems& it, SubMesh& s) {
 }
 
 // A part's neighbours: the parts it receives from and those it sends to (where several parts share
-// nodes the two need not be the same).
-void Decomposer::neighbours(std::vector<SubMesh>& out) {
-  for (int q = 0; q < parts_; ++q) {
-    SubMesh& s = out[q];
-    std::vector<int> nb = s.neighbours;
-    for (int p = 0; p < parts_; ++p)
-      if (!sends_[q][p].empty() && !std::binary_search(s.neighbours.begin(), s.neighbours.end(), p))
-        nb.push_back(p);
-    std::sort(nb.begin(), nb.end());
-    std::vector<std::vector<int>> recv(nb.size()), send(nb.size());
-    for (size_t k = 0; k < nb.size(); ++k) {
-      const auto it = std::lower_bound(s.neighbours.begin(), s.neighbours.end(), nb[k]);
-      if (it != s.neighbours.end() && *it == nb[k]) recv[k] = std::move(s.recv[it - s.neighbours.begin()]);
-      send[k] = std::move(sends_[q][nb[k]]);
-    }
-    s.neighbours = nb;
-    s.recv = std::move(recv);
-    s.send = std::move(send);
-  }
+// nodes the two need not be the same), and what it sends to each.
+PartLists Decomposer::lists(int q) {
+  PartLists l;
+  l.neighbours = recv_from_[q];
+  for (int p = 0; p < parts_; ++p)
+    if (!sends_[q][p].empty() && !std::binary_search(recv_from_[q].begin(), recv_from_[q].end(), p))
+      l.neighbours.push_back(p);
+  std::sort(l.neighbours.begin(), l.neighbours.end());
+  for (int p : l.neighbours) l.send.push_back(std::move(sends_[q][p]));
+  return l;
 }
 
 }  // namespace
+
+void complete_lists(SubMesh& s, PartLists lists) {
+  std::vector<std::vector<int>> recv(lists.neighbours.size());
+  for (size_t k = 0; k < lists.neighbours.size(); ++k) {
+    const auto it = std::lower_bound(s.neighbours.begin(), s.neighbours.end(), lists.neighbours[k]);
+    if (it != s.neighbours.end() && *it == lists.neighbours[k]) recv[k] = std::move(s.recv[it - s.neighbours.begin()]);
+  }
+  s.neighbours = std::move(lists.neighbours);
+  s.recv = std::move(recv);
+  s.send = std::move(lists.send);
+}
 
 std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
                                double contact_reach, const std::vector<double>* at) {
   return Decomposer(whole, elem_part, parts, contact_reach, at).run();
 }
+
+struct PartBuilder::Impl {
+  Decomposer d;
+};
+
+PartBuilder::PartBuilder(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach,
+                         const std::vector<double>* at)
+    : impl_(new Impl{Decomposer(whole, elem_part, parts, contact_reach, at)}) {}
+
+PartBuilder::~PartBuilder() = default;
+
+SubMesh PartBuilder::part(int p) { return impl_->d.part(p); }
+
+PartLists PartBuilder::lists(int p) { return impl_->d.lists(p); }
 
 }  // namespace fdem

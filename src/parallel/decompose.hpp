@@ -32,6 +32,7 @@
 // counted interfaces, then the others (each group in order of its side-A element's local index:
 // the force pass's chunks, where every node has one element). The reductions of a step (energies, counts) run over the first
 // owned_* items (HostMesh::owned_*), so that every item is summed by exactly one part.
+#include <memory>
 #include <vector>
 
 #include "io/checkpoint.hpp"
@@ -75,15 +76,44 @@ struct SubMesh {
 std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
                                double contact_reach = 0, const std::vector<double>* at = nullptr);
 
+// decompose() one part at a time, so that process 0 need not hold every part at once (it sends
+// each as soon as it is built: solver/run_processes.cpp). part(p) builds part p (each once, in any
+// order) with the lists of what it receives (SubMesh::neighbours and recv: the parts it receives
+// from; send empty); what each part sends is known once every part is built: lists(p), which
+// complete_lists adds. The same parts as decompose(), which is built on it. The mesh, the part ids
+// and the positions `at` must outlive the builder.
+struct PartLists {
+  std::vector<int> neighbours;             // sorted: the parts it receives from or sends to
+  std::vector<std::vector<int>> send;      // per neighbour (SubMesh::send)
+};
+class PartBuilder {
+ public:
+  PartBuilder(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach = 0,
+              const std::vector<double>* at = nullptr);
+  ~PartBuilder();
+  PartBuilder(const PartBuilder&) = delete;
+  PartBuilder& operator=(const PartBuilder&) = delete;
+  SubMesh part(int p);
+  PartLists lists(int p);  // after every part is built; each once
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+// Part s with its neighbours and send lists (its recv lists reordered to the neighbours').
+void complete_lists(SubMesh& s, PartLists lists);
+
 // A part as bytes (for sending it to its process) and back; unpack_submesh throws InputError on
 // data that does not unpack exactly (damaged or cut short).
 std::vector<char> pack_submesh(const SubMesh& s);
 SubMesh unpack_submesh(const std::vector<char>& bytes);
-// The same for a run's state (a re-cut sends the whole state to every process).
+std::vector<char> pack_lists(const PartLists& l);
+PartLists unpack_lists(const std::vector<char>& bytes);
 // A whole mesh as bytes and back (process 0 keeps the mesh it cuts the parts from in a file
 // between the cuts: solver/run_processes.cpp).
 std::vector<char> pack_mesh(const HostMesh& m);
 HostMesh unpack_mesh(const std::vector<char>& bytes);
+// The same for a run's state (a re-cut sends the whole state to every process).
 std::vector<char> pack_state(const StateArrays& s);
 StateArrays unpack_state(const std::vector<char>& bytes);
 

@@ -155,6 +155,22 @@ std::vector<char> pack_submesh(const SubMesh& s) {
   return std::move(p.bytes);
 }
 
+std::vector<char> pack_lists(const PartLists& l) {
+  Packer p;
+  p.put(l.neighbours);
+  p.put(l.send);
+  return std::move(p.bytes);
+}
+
+PartLists unpack_lists(const std::vector<char>& bytes) {
+  PartLists l;
+  Unpacker u(bytes);
+  u.get(l.neighbours);
+  u.get(l.send);
+  if (!u.done()) throw InputError("unpack_lists: data left over (damaged)");
+  return l;
+}
+
 std::vector<char> pack_mesh(const HostMesh& m) {
   Packer p;
   mesh_fields(m, [&](const auto& v) { p.put(v); });

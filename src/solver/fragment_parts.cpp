@@ -12,8 +12,8 @@
 
 namespace fdem {
 
-std::vector<int> join_tokens(const std::vector<double>& all, int processes, int width, std::vector<double>& values,
-                             std::vector<int>& offset) {
+std::vector<int> join_tokens(const std::vector<double>& all, int processes, int width,
+                             std::vector<double>& values, std::vector<int>& offset) {
   offset.assign(static_cast<size_t>(processes) + 1, 0);
   values.clear();
   std::vector<std::array<long, 3>> edges;  // (process, its token, process, its token)
@@ -25,12 +25,14 @@ std::vector<int> join_tokens(const std::vector<double>& all, int processes, int 
     const size_t nedges = static_cast<size_t>(all[j + 1]);
     j += 2;
     const size_t nv = static_cast<size_t>(tokens) * width;
-    if (j + nv + 3 * nedges > all.size()) throw std::logic_error("join_tokens: a process's buffer is cut short");
+    if (j + nv + 3 * nedges > all.size())
+      throw std::logic_error("join_tokens: a process's buffer is cut short");
     offset[p + 1] = offset[p] + tokens;
     values.insert(values.end(), all.begin() + static_cast<long>(j), all.begin() + static_cast<long>(j + nv));
     j += nv;
     for (size_t k = 0; k < nedges; ++k, j += 3) {
-      edges.push_back({static_cast<long>(all[j]), static_cast<long>(all[j + 1]), static_cast<long>(all[j + 2])});
+      edges.push_back(
+          {static_cast<long>(all[j]), static_cast<long>(all[j + 1]), static_cast<long>(all[j + 2])});
       from.push_back(p);
     }
   }
@@ -341,7 +343,8 @@ typename PartFragments<D>::Ends PartFragments<D>::ends(const Simulation<D>& sim)
   std::vector<double> vals;
   std::vector<int> offset;
   join_tokens(all, comm_.size(), static_cast<int>(w), vals, offset);
-  if (offset != tok_offset_) throw std::logic_error("PartFragments::ends: the tokens are not the last compute's");
+  if (offset != tok_offset_)
+    throw std::logic_error("PartFragments::ends: the tokens are not the last compute's");
   FragmentPieces pieces;
   std::vector<int> body, elements;
   for (int p = 0; p < comm_.size(); ++p)

@@ -36,8 +36,8 @@ namespace fdem {
 // edge (its token, another process, that process's token)]. On return `values` holds every token's values
 // (width each, in process order), `offset` each process's first token (processes + 1 entries) and
 // the result is every token's class representative (the smallest token of its class).
-std::vector<int> join_tokens(const std::vector<double>& all, int processes, int width, std::vector<double>& values,
-                             std::vector<int>& offset);
+std::vector<int> join_tokens(const std::vector<double>& all, int processes, int width,
+                             std::vector<double>& values, std::vector<int>& offset);
 
 // The classes numbered 0..n-1 in order of their smallest `key` (column `key_col` of `values`,
 // width `width`, the smallest over the class), keeping only the classes whose column `count_col`

@@ -60,18 +60,6 @@ void whole_rows_of(StateArrays& s, const std::string& name, const HostMesh& mesh
   s.f64[name] = std::move(v);
 }
 
-// Every process's part of `mesh` (decompose), packed for sending.
-std::vector<std::vector<char>> packed_parts(const HostMesh& mesh, const std::vector<int>& elem_part, int parts,
-                                            double reach, const std::vector<double>* at) {
-  std::vector<SubMesh> all = decompose(mesh, elem_part, parts, reach, at);
-  std::vector<std::vector<char>> out;
-  for (SubMesh& s : all) {
-    out.push_back(pack_submesh(s));
-    s = SubMesh{};  // packed: freed
-  }
-  return out;
-}
-
 // Process 0 of a run with contact: the whole mesh it cuts the parts anew from, kept between the
 // cuts in a temporary file rather than in memory beside the model (written once: the mesh does not
 // change; read back at each cut). The file is in TMPDIR (else /tmp) and unlinked at once, so it is
@@ -144,7 +132,7 @@ class ProcessesRun {
   RunOptions opt_;  // (the progress lines on process 0 only)
   PreparedRun prep_;
   double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
-  std::vector<std::vector<char>> packed_;  // process 0: every process's part, packed for sending
+  std::unique_ptr<PartBuilder> parts_;  // process 0: builds every process's part as it is sent
   SubMesh part_;                           // this process's part
   // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up;
   // kept_ holds it during the run), and the contact zones' reach
@@ -181,7 +169,8 @@ nlohmann::json ProcessesRun::run() {
   }
 }
 
-// Process 0: the first parts, packed for sending. With contact each part holds the faces within its
+// Process 0: the partition and the builder of the first parts (receive_part builds each as it is
+// sent). With contact each part holds the faces within its
 // contact zone (reach: the search distance, the contact law's penetration depth, ContactSystem::set_law,
 // and the skin, and contact.zone), and the whole mesh is kept for cutting the parts anew.
 void ProcessesRun::first_parts() {
@@ -215,12 +204,12 @@ void ProcessesRun::first_parts() {
           ? restart_parts(*at, bisection)
           : partition_elements(mesh, comm_.size(), method, refined_group(c_));
   check_every_part_filled(elem_part);
-  packed_ = packed_parts(mesh, elem_part, comm_.size(), reach, at);
   elem_part_at_start_ = std::move(elem_part);
   if (reach > 0) {  // kept for cutting the parts anew during the run
     whole_ = std::make_shared<const HostMesh>(std::move(prep_.mesh));
     whole_reach_ = reach;
   }
+  parts_ = std::make_unique<PartBuilder>(whole_ ? *whole_ : prep_.mesh, elem_part_at_start_, comm_.size(), reach, at);
 }
 
 // A partitioner may leave a process without elements on a tiny mesh (METIS does): its part would
@@ -277,11 +266,23 @@ void ProcessesRun::send_first_parts() {
   }
 }
 
-// This process's part from process 0 (packed_ there).
+// This process's part from process 0, where parts_ builds each as it is sent (so that it holds
+// one part at a time beside the whole mesh), then its exchange lists (known once every part is
+// built).
 void ProcessesRun::receive_part() {
   std::vector<char> mine;
-  comm_.scatter_bytes(packed_, mine);
+  comm_.scatter_each(
+      [this](int r) {
+        setup_times::Phase phase("decomposition");  // (the sending is parts_sent's)
+        return pack_submesh(parts_->part(r));
+      },
+      mine);
   part_ = unpack_submesh(mine);
+  std::vector<std::vector<char>> lists;
+  for (int r = 0; root_ && r < comm_.size(); ++r) lists.push_back(pack_lists(parts_->lists(r)));
+  comm_.scatter_bytes(lists, mine);
+  complete_lists(part_, unpack_lists(mine));
+  parts_.reset();
 }
 
 // A process other than process 0 holds no whole mesh: its run loop's is an empty one with the
@@ -340,8 +341,9 @@ void ProcessesRun::record_cut(const CutRequest& cut) {
 }
 
 // Process 0 at a cut: the new parts (parts_by_work; the test hook FDEM_TEST_RECUT moves every
-// element to another process), the elements that change process counted, every process's part
-// packed, and the whole state packed for each; the whole mesh again for the next run loop.
+// element to another process), the elements that change process counted, the builder of the parts
+// (receive_part), and the whole state packed for each; the whole mesh read back from kept_ for it
+// and for the next run loop.
 std::vector<std::vector<char>> ProcessesRun::cut_anew() {
   setup_times::Phase phase("decomposition");
   whole_ = std::make_shared<const HostMesh>(kept_.read());
@@ -355,7 +357,7 @@ std::vector<std::vector<char>> ProcessesRun::cut_anew() {
   cuts_.elements_moved_at_cuts.push_back(moved_now);
   cuts_.elements_moved += moved_now;
   cuts_.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)
-  packed_ = packed_parts(*whole_, elem_part, comm_.size(), whole_reach_, &x);
+  parts_ = std::make_unique<PartBuilder>(*whole_, cuts_.cut_parts, comm_.size(), whole_reach_, &x);
   const std::vector<char> bytes = pack_state(cuts_.state);
   std::vector<std::vector<char>> states(static_cast<size_t>(comm_.size()), bytes);
   return states;

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <thread>
 #include <vector>
 
@@ -87,34 +88,25 @@ class MpiComm final : public Comm {
     MPI_Gatherv(mine.data(), n, MPI_DOUBLE, rank_ == 0 ? all.data() : nullptr, counts.data(), displs.data(),
                 MPI_DOUBLE, 0, MPI_COMM_WORLD);
   }
-  // Process 0 sends parts[r] to process r, in pieces of at most 1 GiB (MPI counts are ints).
+  // Process 0 sends parts[r] to process r (send_bytes).
   void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const override {
-    constexpr long long kPiece = 1LL << 30;
     if (rank_ == 0) {
       for (int r = 1; r < size_; ++r) {
-        const std::vector<char>& b = parts[static_cast<size_t>(r)];
-        long long n = static_cast<long long>(b.size());
-        MPI_Send(&n, 1, MPI_LONG_LONG, r, kTag + 1, MPI_COMM_WORLD);
-        for (long long at = 0; at < n; at += kPiece)
-          MPI_Send(b.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, r, kTag + 1, MPI_COMM_WORLD);
+        send_bytes(parts[static_cast<size_t>(r)], r);
         std::vector<char>().swap(parts[static_cast<size_t>(r)]);  // sent: freed
       }
       mine = std::move(parts[0]);
       return;
     }
-    // process 0 may mesh for minutes first: wait without spinning on a core (MPI's own wait
-    // polls, which takes the core from process 0 where processes share cores)
-    for (int flag = 0;;) {
-      MPI_Iprobe(0, kTag + 1, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
-      if (flag) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    receive_bytes(mine);
+  }
+  void scatter_each(const std::function<std::vector<char>(int)>& make, std::vector<char>& mine) const override {
+    if (rank_ == 0) {
+      for (int r = 1; r < size_; ++r) send_bytes(make(r), r);  // (freed once sent)
+      mine = make(0);
+      return;
     }
-    long long n = 0;
-    MPI_Recv(&n, 1, MPI_LONG_LONG, 0, kTag + 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-    mine.resize(static_cast<size_t>(n));
-    for (long long at = 0; at < n; at += kPiece)
-      MPI_Recv(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, 0, kTag + 1, MPI_COMM_WORLD,
-               MPI_STATUS_IGNORE);
+    receive_bytes(mine);
   }
   long long h5_parallel_access() const override {
 #ifdef FDEM_PARALLEL_HDF5
@@ -141,6 +133,29 @@ class MpiComm final : public Comm {
   }
 
  private:
+  static constexpr long long kPiece = 1LL << 30;
+  // Process 0: b to process r, its size first, in pieces of at most 1 GiB (MPI counts are ints).
+  void send_bytes(const std::vector<char>& b, int r) const {
+    long long n = static_cast<long long>(b.size());
+    MPI_Send(&n, 1, MPI_LONG_LONG, r, kTag + 1, MPI_COMM_WORLD);
+    for (long long at = 0; at < n; at += kPiece)
+      MPI_Send(b.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, r, kTag + 1, MPI_COMM_WORLD);
+  }
+  // The others: what process 0 sends. It may mesh for minutes first: wait without spinning on a
+  // core (MPI's own wait polls, which takes the core from process 0 where processes share cores).
+  void receive_bytes(std::vector<char>& mine) const {
+    for (int flag = 0;;) {
+      MPI_Iprobe(0, kTag + 1, MPI_COMM_WORLD, &flag, MPI_STATUS_IGNORE);
+      if (flag) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    long long n = 0;
+    MPI_Recv(&n, 1, MPI_LONG_LONG, 0, kTag + 1, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+    mine.resize(static_cast<size_t>(n));
+    for (long long at = 0; at < n; at += kPiece)
+      MPI_Recv(mine.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, 0, kTag + 1, MPI_COMM_WORLD,
+               MPI_STATUS_IGNORE);
+  }
   static constexpr int kTag = 7301;
   int rank_ = 0, size_ = 1;
   bool direct_ = true;
