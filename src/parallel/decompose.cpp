@@ -85,6 +85,8 @@ struct NodeGrid {
   double glo[3] = {0, 0, 0}, cell = 0;
   long dims[3] = {1, 1, 1};
   Rows nodes;                          // by cell id
+  std::vector<int> owner;              // the part owning each of nodes.items (read in its order)
+  std::vector<char> mixed;             // per cell: its nodes have more than one owner
   long coord(double x, int k) const {  // the cell along axis k of x (clamped to the grid)
     const long c = static_cast<long>(std::floor((x - glo[k]) / cell));
     return std::clamp<long>(c, 0, dims[k] - 1);
@@ -121,8 +123,7 @@ NodeGrid node_grid(const Boxes& b, const std::vector<double>& X, int D, int nn, 
 // The query: for each element, the nodes of the cells its box widened by `reach` covers; an
 // element joins the zone of each other part that owns one of them within reach of the box.
 std::vector<std::vector<int>> query_zones(const Boxes& b, const NodeGrid& g, const std::vector<double>& X,
-                                          const std::vector<int>& elem_part, const std::vector<int>& owner,
-                                          int parts, double reach) {
+                                          const std::vector<int>& elem_part, int parts, double reach) {
   const int D = g.dim, ne = static_cast<int>(elem_part.size());
   std::vector<std::vector<int>> zone(parts);
   std::vector<int> stamp(parts, -1);
@@ -140,9 +141,12 @@ std::vector<std::vector<int>> query_zones(const Boxes& b, const NodeGrid& g, con
       for (c[1] = c0[1]; c[1] <= c1[1]; ++c[1])
         for (c[0] = c0[0]; c[0] <= c1[0]; ++c[0]) {
           const long id = g.cell_id(c);
-          for (int j = g.nodes.start[id]; j < g.nodes.start[id + 1]; ++j) {
-            const int n = g.nodes.items[j], p = owner[n];
+          const int j0 = g.nodes.start[id], j1 = g.nodes.start[id + 1];
+          if (j0 == j1 || (!g.mixed[id] && (g.owner[j0] == elem_part[e] || stamp[g.owner[j0]] == e))) continue;
+          for (int j = j0; j < j1; ++j) {
+            const int p = g.owner[j];
             if (p == elem_part[e] || stamp[p] == e) continue;
+            const int n = g.nodes.items[j];
             double d2 = 0;
             for (int k = 0; k < D; ++k) {
               const double x = X[static_cast<size_t>(n) * D + k];
@@ -168,8 +172,17 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
   const int D = whole.dim, nn = whole.num_nodes(), ne = whole.num_elems();
   if (ne == 0 || nn == 0) return std::vector<std::vector<int>>(parts);
   const Boxes b = bounding_boxes(whole, X);
-  const NodeGrid g = node_grid(b, X, D, nn, ne, reach);
-  return query_zones(b, g, X, elem_part, owner, parts, reach);
+  NodeGrid g = node_grid(b, X, D, nn, ne, reach);
+  // the owners beside the grid's nodes: most nodes a query meets are its element's part's, skipped
+  // on a sequential read instead of a random one
+  g.owner.resize(g.nodes.items.size());
+  for (size_t j = 0; j < g.owner.size(); ++j) g.owner[j] = owner[g.nodes.items[j]];
+  // (and a cell all of whose nodes are the element's part's is skipped whole: the interior of a part)
+  g.mixed.assign(g.nodes.start.size() - 1, 0);
+  for (size_t id = 0; id + 1 < g.nodes.start.size(); ++id)
+    for (int j = g.nodes.start[id] + 1; j < g.nodes.start[id + 1] && !g.mixed[id]; ++j)
+      g.mixed[id] = g.owner[j] != g.owner[j - 1];
+  return query_zones(b, g, X, elem_part, parts, reach);
 }
 
 // Who owns what: each node's part (that of the first element holding it; orphan nodes: part 0) and

@@ -72,8 +72,9 @@ class RunLoop {
   // A run over processes: the snapshots set up from process 0's whole mesh before the model is
   // built (one process: null, they are set up after it).
   std::unique_ptr<RunSnapshots<D>> early_snapshots(const SubMesh* part) const;
-  // The mesh the model is built from: one process's whole mesh, or the part, and then the whole
-  // mesh is let go of (process 0's peak holds the whole mesh or its model, not both).
+  // The mesh the model is built from: one process's whole mesh, or the part; over processes the
+  // counts are taken from the whole mesh here and then it is let go of (process 0's peak holds the
+  // whole mesh or its model, not both).
   const HostMesh& model_source(const SubMesh* part);
   void restore(const StateArrays& r);
   void announce() const;
