@@ -48,6 +48,8 @@ class Comm {
     }
     scatter_bytes(parts, mine);
   }
+  // Process 0's `bytes` to every process (the others' replaced by them).
+  virtual void broadcast_bytes(std::vector<char>& bytes) const = 0;
   // An HDF5 file access property list (hid_t) for opening one file on every process with MPI-IO,
   // which the caller closes; -1 when the build's HDF5 is not parallel (the frames are then gathered
   // on process 0: src/solver/run_output.cpp). Collective: every process calls it.
@@ -73,6 +75,7 @@ class OneProcess final : public Comm {
   void scatter_bytes(std::vector<std::vector<char>>& parts, std::vector<char>& mine) const override {
     mine = parts.empty() ? std::vector<char>{} : std::move(parts[0]);
   }
+  void broadcast_bytes(std::vector<char>&) const override {}
   std::string gpu_aware() const override { return ""; }
   [[noreturn]] void abort(int code) const override { std::exit(code); }
 };

@@ -122,9 +122,9 @@ class ProcessesRun {
   void take_restart_cuts();
   LoopEnd run_part();
   void record_cut(const CutRequest& cut);
-  std::vector<std::vector<char>> cut_anew();
+  void cut_anew();
   std::vector<int> parts_by_work(const std::vector<double>& x) const;
-  void send_cut(std::vector<std::vector<char>>& states);
+  void send_cut();
 
   const Comm& comm_;
   const bool root_;
@@ -162,9 +162,8 @@ nlohmann::json ProcessesRun::run() {
     // their new owners.
     const auto cut0 = std::chrono::steady_clock::now();
     record_cut(end.cut);
-    std::vector<std::vector<char>> states;
-    if (root_) states = cut_anew();
-    send_cut(states);
+    if (root_) cut_anew();
+    send_cut();
     cuts_.cut_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cut0).count();
   }
 }
@@ -342,9 +341,8 @@ void ProcessesRun::record_cut(const CutRequest& cut) {
 
 // Process 0 at a cut: the new parts (parts_by_work; the test hook FDEM_TEST_RECUT moves every
 // element to another process), the elements that change process counted, the builder of the parts
-// (receive_part), and the whole state packed for each; the whole mesh read back from kept_ for it
-// and for the next run loop.
-std::vector<std::vector<char>> ProcessesRun::cut_anew() {
+// (receive_part); the whole mesh read back from kept_ for it and for the next run loop.
+void ProcessesRun::cut_anew() {
   setup_times::Phase phase("decomposition");
   whole_ = std::make_shared<const HostMesh>(kept_.read());
   const std::vector<double>& x = cuts_.state.array("model/x", static_cast<long long>(whole_->X.size()));
@@ -358,9 +356,6 @@ std::vector<std::vector<char>> ProcessesRun::cut_anew() {
   cuts_.elements_moved += moved_now;
   cuts_.cut_parts = elem_part;  // (checkpoints: a restart on as many processes cuts the same parts)
   parts_ = std::make_unique<PartBuilder>(*whole_, cuts_.cut_parts, comm_.size(), whole_reach_, &x);
-  const std::vector<char> bytes = pack_state(cuts_.state);
-  std::vector<std::vector<char>> states(static_cast<size_t>(comm_.size()), bytes);
-  return states;
 }
 
 // The parts of a cut, at the current positions x: the elements weighted by their modelled work of
@@ -369,13 +364,19 @@ std::vector<std::vector<char>> ProcessesRun::cut_anew() {
 std::vector<int> ProcessesRun::parts_by_work(const std::vector<double>& x) const {
   const StateArrays& state = cuts_.state;
   const std::vector<double>& nw = state.array("recut/node_work", static_cast<long long>(whole_->num_nodes()));
-  HostMesh moved = *whole_;
-  moved.X = x;
   const std::vector<long long>& handed =
       state.int_array("model/icontact", static_cast<long long>(whole_->num_ifaces()));
-  const std::vector<double> work = element_work(moved, nw, handed, c_.work_model);
-  if (!cut_by_graph()) return partition_elements_weighted(moved, comm_.size(), work);
+  const std::vector<double> work = element_work(*whole_, nw, handed, c_.work_model);
+  if (!cut_by_graph()) {  // (the bisection reads the elements at x: those alone are copied)
+    HostMesh at;
+    at.dim = whole_->dim;
+    at.X = x;
+    at.elems = whole_->elems;
+    return partition_elements_weighted(at, comm_.size(), work);
+  }
   // (measurement switch) METIS on the graph of the interfaces not handed over
+  HostMesh moved = *whole_;
+  moved.X = x;
   std::vector<double> x3(3 * static_cast<size_t>(moved.num_nodes()), 0.0), gone(handed.size());
   for (int n = 0; n < moved.num_nodes(); ++n)
     for (int k = 0; k < moved.dim; ++k)
@@ -384,13 +385,18 @@ std::vector<int> ProcessesRun::parts_by_work(const std::vector<double>& x) const
   return partition_elements_weighted(moved_mesh(moved, x3, gone), comm_.size(), work, true);
 }
 
-// Every process at a cut: its new part and the whole state at the cut from process 0 (states
-// there), which the next parts start from.
-void ProcessesRun::send_cut(std::vector<std::vector<char>>& states) {
+// Every process at a cut: its new part and the whole state at the cut from process 0 (one
+// broadcast; process 0 frees its own before it takes the copy every process takes), which the
+// next parts start from.
+void ProcessesRun::send_cut() {
   receive_part();
-  std::vector<char> mine;
-  comm_.scatter_bytes(states, mine);
-  cuts_.state = unpack_state(mine);
+  std::vector<char> bytes;
+  if (root_) {
+    bytes = pack_state(cuts_.state);
+    cuts_.state = StateArrays{};
+  }
+  comm_.broadcast_bytes(bytes);
+  cuts_.state = unpack_state(bytes);
   cuts_.state.file = "(the run's state where its parts were cut anew)";
   if (!root_) hold_part_only();
   from_ = &cuts_.state;

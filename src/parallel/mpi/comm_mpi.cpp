@@ -108,6 +108,13 @@ class MpiComm final : public Comm {
     }
     receive_bytes(mine);
   }
+  void broadcast_bytes(std::vector<char>& bytes) const override {
+    long long n = static_cast<long long>(bytes.size());
+    MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD);
+    if (rank_ != 0) bytes.resize(static_cast<size_t>(n));
+    for (long long at = 0; at < n; at += kPiece)
+      MPI_Bcast(bytes.data() + at, static_cast<int>(std::min(kPiece, n - at)), MPI_CHAR, 0, MPI_COMM_WORLD);
+  }
   long long h5_parallel_access() const override {
 #ifdef FDEM_PARALLEL_HDF5
     const hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
