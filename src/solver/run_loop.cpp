@@ -58,6 +58,9 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   const std::string step_warning = contact_step_warning(sim_.stable, c.safety_factor, c.dt);
   if (writes_ && !began_at_cut() && !step_warning.empty())
     std::fprintf(stderr, "fdem: warning: %s\n", step_warning.c_str());
+  // the whole state of the cut these parts began at is taken: freed (every process received all
+  // of it; the next cut gathers a new one)
+  if (began_at_cut()) cuts_->state = StateArrays{};
 }
 
 // For summary.json and the checkpoint header. A process of several that holds no whole mesh (not
