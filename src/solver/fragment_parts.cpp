@@ -219,7 +219,7 @@ void PartFragments<D>::label_bodies(const Simulation<D>& sim) {
 }
 
 // This process's tokens of the present state, for join_tokens: per token the smallest whole-mesh
-// node index, the own elements' mass and count; per shared node its token.
+// node index, the own elements' mass and count; the edges to the neighbours' tokens (ghost_edges).
 template <int D>
 std::vector<double> PartFragments<D>::token_buffer(const Simulation<D>& sim) {
   const Model<D>& m = sim.m;
