@@ -178,9 +178,9 @@ void ProcessesRun::first_parts() {
     throw InputError(c_.file + ": the mesh has " + std::to_string(mesh.num_elems()) + " elements, fewer than the " +
                      std::to_string(comm_.size()) + " processes of this run: run it on at most " +
                      std::to_string(mesh.num_elems()) + " processes (mpirun -n), or with a finer mesh");
+  setup_times::Phase phase("decomposition");
   const MeshQuality mq = mesh_quality(mesh);
   mean_size_ = mq.mean_size;
-  setup_times::Phase phase("decomposition");
   const double reach = contact_wanted(c_, mesh) ? contact_penetration_depth(mq.min_size, mq.mean_size) +
                                                       c_.contact.skin + c_.contact.zone
                                                 : 0.0;
@@ -307,7 +307,10 @@ void ProcessesRun::take_restart_cuts() {
 // This process's part run from from_ until the run ends or its parts are to be cut anew. The run
 // loop takes process 0's whole mesh (kept there when it cuts the parts anew) or the others' empty one.
 LoopEnd ProcessesRun::run_part() {
-  if (whole_ && !kept_.kept()) kept_.write(*whole_);
+  if (whole_ && !kept_.kept()) {
+    setup_times::Phase phase("mesh_kept");
+    kept_.write(*whole_);
+  }
   // (the run loop lets go of it once the snapshots are set up, before it builds the model)
   std::shared_ptr<const HostMesh> mesh =
       whole_ ? std::move(whole_) : std::make_shared<const HostMesh>(std::move(prep_.mesh));
