@@ -147,70 +147,52 @@ void submesh_fields(S& s, F&& f) {
   f(s.inert_ghosts);
 }
 
+// Packed and unpacked over one list of fields (fields(x, f): f is Packer::put or Unpacker::get);
+// unpacking throws InputError naming `what` when the bytes do not unpack exactly.
+template <class T, class Fields>
+std::vector<char> pack_fields(const T& x, Fields&& fields) {
+  Packer p;
+  fields(x, [&](const auto& v) { p.put(v); });
+  return std::move(p.bytes);
+}
+
+template <class T, class Fields>
+T unpack_fields(const std::vector<char>& bytes, Fields&& fields, const char* what) {
+  T x;
+  Unpacker u(bytes);
+  fields(x, [&](auto& v) { u.get(v); });
+  if (!u.done()) throw InputError(std::string(what) + ": data left over (damaged)");
+  return x;
+}
+
+const auto submesh_list = [](auto& s, auto&& f) { submesh_fields(s, f); };
+const auto mesh_list = [](auto& m, auto&& f) { mesh_fields(m, f); };
+const auto lists_list = [](auto& l, auto&& f) {
+  f(l.neighbours);
+  f(l.send);
+};
+const auto state_list = [](auto& s, auto&& f) {
+  f(s.f64);
+  f(s.i64);
+  f(s.str);
+  f(s.file);
+};
+
 }  // namespace
 
-std::vector<char> pack_submesh(const SubMesh& s) {
-  Packer p;
-  submesh_fields(s, [&](const auto& v) { p.put(v); });
-  return std::move(p.bytes);
-}
-
-std::vector<char> pack_lists(const PartLists& l) {
-  Packer p;
-  p.put(l.neighbours);
-  p.put(l.send);
-  return std::move(p.bytes);
-}
-
-PartLists unpack_lists(const std::vector<char>& bytes) {
-  PartLists l;
-  Unpacker u(bytes);
-  u.get(l.neighbours);
-  u.get(l.send);
-  if (!u.done()) throw InputError("unpack_lists: data left over (damaged)");
-  return l;
-}
-
-std::vector<char> pack_mesh(const HostMesh& m) {
-  Packer p;
-  mesh_fields(m, [&](const auto& v) { p.put(v); });
-  return std::move(p.bytes);
-}
-
-HostMesh unpack_mesh(const std::vector<char>& bytes) {
-  HostMesh m;
-  Unpacker u(bytes);
-  mesh_fields(m, [&](auto& v) { u.get(v); });
-  if (!u.done()) throw InputError("unpack_mesh: data left over (damaged)");
-  return m;
-}
-
-std::vector<char> pack_state(const StateArrays& s) {
-  Packer p;
-  p.put(s.f64);
-  p.put(s.i64);
-  p.put(s.str);
-  p.put(s.file);
-  return std::move(p.bytes);
-}
-
-StateArrays unpack_state(const std::vector<char>& bytes) {
-  StateArrays s;
-  Unpacker u(bytes);
-  u.get(s.f64);
-  u.get(s.i64);
-  u.get(s.str);
-  u.get(s.file);
-  if (!u.done()) throw InputError("unpack_state: data left over (damaged)");
-  return s;
-}
-
+std::vector<char> pack_submesh(const SubMesh& s) { return pack_fields(s, submesh_list); }
 SubMesh unpack_submesh(const std::vector<char>& bytes) {
-  SubMesh s;
-  Unpacker u(bytes);
-  submesh_fields(s, [&](auto& v) { u.get(v); });
-  if (!u.done()) throw InputError("unpack_submesh: data left over (damaged)");
-  return s;
+  return unpack_fields<SubMesh>(bytes, submesh_list, "unpack_submesh");
+}
+std::vector<char> pack_lists(const PartLists& l) { return pack_fields(l, lists_list); }
+PartLists unpack_lists(const std::vector<char>& bytes) {
+  return unpack_fields<PartLists>(bytes, lists_list, "unpack_lists");
+}
+std::vector<char> pack_mesh(const HostMesh& m) { return pack_fields(m, mesh_list); }
+HostMesh unpack_mesh(const std::vector<char>& bytes) { return unpack_fields<HostMesh>(bytes, mesh_list, "unpack_mesh"); }
+std::vector<char> pack_state(const StateArrays& s) { return pack_fields(s, state_list); }
+StateArrays unpack_state(const std::vector<char>& bytes) {
+  return unpack_fields<StateArrays>(bytes, state_list, "unpack_state");
 }
 
 }  // namespace fdem
