@@ -295,10 +295,6 @@ TEST(Refine, InterfaceNumberingFollowsFromTheCoarseMesh) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 // The embedded diameter of the disc generator is a node set and a face set ("diameter"), plain and
 // mirror-symmetric: a jitter leaves its nodes on it (before, `mesh.jitter` moved them off and the
 // Brazilian disc's split no longer had its straight path: strength +23 to +29 % on two meshes), and

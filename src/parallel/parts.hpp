@@ -37,7 +37,6 @@ class Parts {
     whole_nn_ = part.whole_nodes;
     whole_ne_ = part.whole_elems;
     whole_ni_ = part.whole_ifaces;
-    neighbours_ = part.neighbours;
     send_ = part.send;
     recv_ = part.recv;
   }
@@ -115,16 +114,19 @@ class Parts {
   long whole_nodes() const { return whole_nn_; }
   long whole_elems() const { return whole_ne_; }
   long whole_ifaces() const { return whole_ni_; }
-  // The exchange's lists on the host (SubMesh::neighbours, send, recv: local node indices), for
-  // exchanges of other values than the step's (solver/fragment_parts.hpp).
-  const std::vector<int>& neighbours() const { return neighbours_; }
+  // The exchange's lists on the host (the Halo's neighbours; SubMesh::send, recv: local node
+  // indices), for exchanges of other values than the step's (solver/fragment_parts.hpp).
+  const std::vector<int>& neighbours() const {
+    static const std::vector<int> none;
+    return halo_ ? halo_->neighbours : none;
+  }
   const std::vector<std::vector<int>>& send_lists() const { return send_; }
   const std::vector<std::vector<int>>& recv_lists() const { return recv_; }
 
  private:
   std::shared_ptr<const Comm> comm_;
   std::unique_ptr<Halo<D>> halo_;  // null: one part
-  std::vector<int> node_global_, elem_global_, iface_global_, neighbours_;
+  std::vector<int> node_global_, elem_global_, iface_global_;
   std::vector<std::vector<int>> send_, recv_;
   long whole_nn_ = 0, whole_ne_ = 0, whole_ni_ = 0;
 };

@@ -199,7 +199,11 @@ void PartFragments<D>::label_bodies(const Simulation<D>& sim) {
   for (int q = 0; q < m.ni; ++q) uf.join(fc(q, 0), fc(q, D));
   Tokens tok(m.nn);
   elem_body_tok_.resize(static_cast<size_t>(own_elems_));
-  for (int e = 0; e < own_elems_; ++e) elem_body_tok_[e] = tok(uf.find(el(e, 0)));
+  node0_.resize(static_cast<size_t>(own_elems_));
+  for (int e = 0; e < own_elems_; ++e) {
+    node0_[e] = el(e, 0);
+    elem_body_tok_[e] = tok(uf.find(node0_[e]));
+  }
   const std::vector<double> edges = ghost_edges<D>(sim.parts(), [&](int n) { return tok(uf.find(n)); });
   // per token: the smallest whole-mesh index of its own elements, and their count
   std::vector<double> values(2 * static_cast<size_t>(tok.count), 0.0);
@@ -225,11 +229,10 @@ std::vector<double> PartFragments<D>::token_buffer(const Simulation<D>& sim) {
   const Model<D>& m = sim.m;
   last_.rounds = label_components<D>(m, par_, lab_);
   auto lab = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), lab_);
-  auto el = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.elem);
   const std::vector<int>& ng = sim.parts().node_global();
   Tokens tok(m.nn);
   elem_tok_.resize(static_cast<size_t>(own_elems_));
-  for (int e = 0; e < own_elems_; ++e) elem_tok_[e] = tok(lab(el(e, 0)));
+  for (int e = 0; e < own_elems_; ++e) elem_tok_[e] = tok(lab(node0_[e]));
   const std::vector<double> edges = ghost_edges<D>(sim.parts(), [&](int n) { return tok(lab(n)); });
   tokens_ = tok.count;
   std::vector<double> values(3 * static_cast<size_t>(tokens_), 0.0);

@@ -94,6 +94,8 @@ class PartFragments {
   int own_elems_ = 0;
   Kokkos::View<int*> par_, lab_;  // the local labelling's work space and node labels
   std::vector<double> emass_;     // own elements' masses (rho V0)
+  std::vector<int> node0_;        // own elements' first nodes (a labelling reads no other: no copy of
+                                  // the connectivity from the device at each one)
   std::vector<int> elem_tok_;     // own element -> its token (the last compute)
   int tokens_ = 0;                // this process's tokens (the last compute)
   // process 0, the last compute: every process's first token, every token's fragment (-1: none),

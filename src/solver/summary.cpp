@@ -238,8 +238,10 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   summary["interfaces_failed"] = last.failed;
   summary["momentum_N_s"] = std::vector<double>(last.momentum, last.momentum + D);
   if (ContactSystem<D>* ct = sim.contact()) summary["contact"] = contact_report(*ct, sim);
-  if (frag) summary["fragments"] = frag->summary(sim);
-  if (frag) summary["fragment_labelling"] = frag->labelling_report();
+  if (frag) {
+    summary["fragments"] = frag->summary(sim);
+    summary["fragment_labelling"] = frag->labelling_report();
+  }
   summary["results"] = results_report(c, sim, history);
   if (r.checkpoint_every > 0 || r.restart || r.checkpoints_written > 0)
     summary["checkpoint"] = checkpoint_report(r);
@@ -264,8 +266,8 @@ namespace {
 nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
   static const std::vector<std::string> names = {
       "gmsh_meshing", "gmsh_extraction", "gmsh_process", "mesh", "refinement", "mesh_transforms",
-      "mesh_checks", "renumbering", "interface_insertion", "decomposition", "parts_sent", "mesh_kept", "model_elements",
-      "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
+      "mesh_checks", "renumbering", "interface_insertion", "decomposition", "parts_sent", "mesh_kept",
+      "model_elements", "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
   const nlohmann::json st = setup_times::report();
   std::vector<double> mine(names.size() + 4, 0.0);
   for (const auto& ph : st.at("phases")) {
