@@ -12,6 +12,7 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <iostream>
 #include <thread>
 #include <vector>
 
@@ -134,7 +135,14 @@ class MpiComm final : public Comm {
     return direct_ ? "yes" : "no (device buffers go through host copies)";
   }
   [[noreturn]] void abort(int code) const override {
+    // mpirun forwards each process's output on its own time, and MPI_Abort ends the job at once: a
+    // message just written can be lost (seen in CI under load: exit 2 and no error line). The
+    // streams are flushed and mpirun is given a second to forward them first.
+    std::cout.flush();
+    std::cerr.flush();
+    std::fflush(stdout);
     std::fflush(stderr);
+    std::this_thread::sleep_for(std::chrono::seconds(1));
     MPI_Abort(MPI_COMM_WORLD, code);
     std::abort();  // MPI_Abort does not return; if it did, this process ends anyway
   }
