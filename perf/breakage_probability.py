@@ -38,23 +38,29 @@ DEFAULT_SCATTER = '{"distribution": "weibull", "modulus": 5}'
 
 def run_speed(a, v):
     out = os.path.join(a.runs, f"breakage_v{v:g}")
-    cmd = [a.fdem, "ensemble", a.case, "-n", str(a.n), "--out", out, "--vary", "strength", "--seed", str(a.seed),
+    cmd = [a.fdem, "ensemble", a.case, "-n", str(a.n), "--out", out, "--vary", a.vary, "--seed", str(a.seed),
            "--jobs", str(a.jobs), "--threads", "1", "--set", f"parameters.speed={v:g}",
-           "--set", "fracture.scatter=" + a.scatter, "--set", "output.snapshot_count=0"]
+           "--set", "output.snapshot_count=0"]
+    if a.scatter != "case":
+        cmd += ["--set", "fracture.scatter=" + a.scatter]
     for s in a.set:
         cmd += ["--set", s]
     t0 = time.time()
     rc = subprocess.call(cmd, stdout=subprocess.DEVNULL)
     if rc not in (0, 3):
         sys.exit(f"breakage_probability: {' '.join(cmd)} ended with exit status {rc}")
-    largest = []
+    largest, masses = [], []
     for i in range(a.n):
         rec = os.path.join(out, f"r{i:04d}", "realisation.json")
         if os.path.exists(rec) and json.load(open(rec))["status"] == "done":
             s = json.load(open(os.path.join(out, f"r{i:04d}", "summary.json")))
             largest.append(s["fragments"]["largest_fraction"])
+            masses.append(s["fragments"]["total_mass_kg"])
     rep = json.load(open(os.path.join(out, "ensemble.json")))
-    return {"speed": v, "W_J_per_kg": 0.5 * v * v, "command": " ".join(cmd), "wall_seconds": time.time() - t0,
+    # W: the kinetic energy per unit mass of the particle: its own speed's, or a striker's of the given
+    # mass over the particle's mass (a drop weight's test)
+    W = 0.5 * v * v if not a.striker_mass else 0.5 * a.striker_mass * v * v / (sum(masses) / max(1, len(masses)))
+    return {"speed": v, "W_J_per_kg": W, "command": " ".join(cmd), "wall_seconds": time.time() - t0,
             "largest_fractions": largest, "broken": sum(1 for x in largest if x < a.broken_below),
             "n": len(largest), "failed": rep["failed"],
             "largest_fraction": rep["results"].get("fragments.largest_fraction"),
@@ -170,7 +176,11 @@ def main():
     p.add_argument("--fdem", default="build/openmp/fdem")
     p.add_argument("--jobs", type=int, default=2)
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--scatter", default=DEFAULT_SCATTER)
+    p.add_argument("--scatter", default=DEFAULT_SCATTER, help="fracture.scatter for every run, or 'case': the case's own")
+    p.add_argument("--vary", default="strength", help="fdem ensemble --vary (default: strength)")
+    p.add_argument("--striker-mass", type=float, default=0.0,
+                   help="the speed is a striker's of this mass (kg; a drop weight): W = M v^2 / (2 m), m the "
+                        "particle's mass (summary.json fragments.total_mass_kg); default: the particle's own speed, W = v^2 / 2")
     p.add_argument("--broken-below", type=float, default=0.8)
     p.add_argument("--set", action="append", default=[])
     p.add_argument("--plot")
@@ -192,7 +202,8 @@ def main():
     f = fit(points)
     boot = bootstrap(rows, 500, a.seed) if f else None
     git = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    doc = {"case": a.case, "n": a.n, "scatter": a.scatter, "sets": a.set, "broken_below": a.broken_below,
+    doc = {"case": a.case, "n": a.n, "scatter": a.scatter, "vary": a.vary, "striker_mass_kg": a.striker_mass,
+           "sets": a.set, "broken_below": a.broken_below,
            "commit": git, "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
            "load_average": os.getloadavg(), "rows": rows, "fit": f, "bootstrap": boot}
     doc.update(meta)
