@@ -49,6 +49,19 @@ std::vector<double> entry_values(const StateArrays& s, const std::string& name) 
   return std::vector<double>(v.begin(), v.end());
 }
 
+// entry_values, taking the entry out of s (no copy of a double entry)
+std::vector<double> take_entry(StateArrays& s, const std::string& name) {
+  std::vector<double> v;
+  if (auto it = s.f64.find(name); it != s.f64.end()) {
+    v = std::move(it->second);
+    s.f64.erase(it);
+  } else {
+    v = entry_values(s, name);
+    s.i64.erase(name);
+  }
+  return v;
+}
+
 void put_entry(StateArrays& s, const std::string& name, const std::vector<double>& v, bool integer) {
   if (!integer) {
     s.f64[name] = v;
@@ -188,13 +201,16 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
   sim.save_state(local);
   const bool root = sim.parts().comm().rank() == 0;
   whole = StateArrays{};
-  if (root) whole = local;  // the entries every process holds alike; the others replaced below
+  // Each per-node and per-interface entry is taken out of `local` as it is handled (its rows into
+  // `rows`, or gathered), so that this process holds its state about once, not once in `local` and
+  // again in its rows (and on process 0 a third time in a copy of `local`): the checkpoint's and the
+  // cut's peak memory. Process 0 keeps what is left (the entries every process holds alike) after.
   for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
     double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
     sim.parts().comm().min(&absent, 1);
     if (absent > 0) continue;
     const bool integer = local.i64.count(e.name) > 0;
-    const std::vector<double> v = entry_values(local, e.name);
+    std::vector<double> v = take_entry(local, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
     const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
@@ -210,11 +226,14 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
       r.width = e.width;
       r.ids = e.nodes ? &sim.parts().node_global() : &sim.parts().iface_global();
       r.own = own;
-      for (size_t b = 0; b < blocks; ++b)
-        r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+      if (blocks == 1) {  // the own rows come first: no copy
+        v.resize(own * w);  // (the ghost rows' capacity stays: a few per cent)
+        r.values = std::move(v);
+      } else {
+        for (size_t b = 0; b < blocks; ++b)
+          r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+      }
       rows->push_back(std::move(r));
-      whole.f64.erase(e.name);
-      whole.i64.erase(e.name);
       continue;
     }
     std::vector<double> out;
@@ -224,10 +243,12 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
                                                    static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces()));
       out.insert(out.end(), rows.begin(), rows.end());
     }
-    if (!root) continue;
-    whole.f64.erase(e.name);
-    whole.i64.erase(e.name);
-    put_entry(whole, e.name, out, integer);
+    if (root) put_entry(whole, e.name, out, integer);
+  }
+  if (root) {  // the entries every process holds alike (those gathered above stay as gathered)
+    for (auto& kv : local.f64) whole.f64.insert(kv);
+    for (auto& kv : local.i64) whole.i64.insert(kv);
+    for (auto& kv : local.str) whole.str.insert(kv);
   }
   for (const char* name : kSummedEntries) {
     if (!local.f64.count(name)) continue;  // (the same on every process: the case decides)
