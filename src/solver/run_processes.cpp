@@ -31,6 +31,7 @@
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
 #include "solver/summary.hpp"
+#include "solver/whole_state.hpp"
 
 #include "solver/run_setup.hpp"
 
@@ -388,18 +389,74 @@ std::vector<int> ProcessesRun::parts_by_work(const std::vector<double>& x) const
   return partition_elements_weighted(moved_mesh(moved, x3, gone), comm_.size(), work, true);
 }
 
-// Every process at a cut: its new part and the whole state at the cut from process 0 (one
-// broadcast; process 0 frees its own before it takes the copy every process takes), which the
-// next parts start from.
+// Process 0's state `s` to every process, an entry at a time (each packed, sent and unpacked in
+// turn, process 0 letting go of each as it packs it), the others keeping only their part's rows of
+// each as it arrives (`keep`, null on process 0): no process holds the whole state twice, as a
+// single message would make it (the state and its bytes; 0.93 kB per tetrahedron each), and the
+// others hold their rows only.
+void broadcast_state(const Comm& comm, StateArrays& s, bool root, const PartRows* keep) {
+  // first the index: every entry's name (index.str: k -> name), which are integers (index.i64), the
+  // strings and the file name; then the entries in that order
+  StateArrays index;
+  std::vector<char> bytes;
+  if (root) {
+    index.file = s.file;
+    std::vector<long long>& integer = index.i64["integer"];
+    for (const auto& kv : s.f64) {
+      index.str[std::to_string(integer.size())] = kv.first;
+      integer.push_back(0);
+    }
+    for (const auto& kv : s.i64) {
+      index.str[std::to_string(integer.size())] = kv.first;
+      integer.push_back(1);
+    }
+    bytes = pack_state(index);
+  }
+  comm.broadcast_bytes(bytes);
+  index = unpack_state(bytes);
+  StateArrays out;
+  out.file = index.file;
+  const std::vector<long long>& integer = index.i64.at("integer");
+  for (size_t k = 0; k < integer.size(); ++k) {
+    const std::string& name = index.str.at(std::to_string(k));
+    StateArrays one;
+    if (root) {
+      if (integer[k])
+        one.i64[name] = std::move(s.i64.at(name)), s.i64.erase(name);
+      else
+        one.f64[name] = std::move(s.f64.at(name)), s.f64.erase(name);
+      bytes = pack_state(one);
+      one = StateArrays{};
+    }
+    comm.broadcast_bytes(bytes);
+    one = unpack_state(bytes);
+    for (auto& kv : one.f64) {
+      if (keep) keep->keep(kv.first, kv.second);
+      out.f64[kv.first] = std::move(kv.second);
+    }
+    for (auto& kv : one.i64) {
+      if (keep) keep->keep(kv.first, kv.second);
+      out.i64[kv.first] = std::move(kv.second);
+    }
+  }
+  StateArrays strings;  // (small)
+  if (root) {
+    strings.str = std::move(s.str);
+    bytes = pack_state(strings);
+  }
+  comm.broadcast_bytes(bytes);
+  out.str = unpack_state(bytes).str;
+  if (keep) PartRows::mark(out);
+  s = std::move(out);
+}
+
+// Every process at a cut: its new part and the whole state at the cut from process 0
+// (broadcast_state), which the next parts start from.
 void ProcessesRun::send_cut() {
   receive_part();
-  std::vector<char> bytes;
-  if (root_) {
-    bytes = pack_state(cuts_.state);
-    cuts_.state = StateArrays{};
-  }
-  comm_.broadcast_bytes(bytes);
-  cuts_.state = unpack_state(bytes);
+  // (process 0 keeps the whole state: it checks the new parts against it, ManyParts::check_cut)
+  const PartRows rows{c_.dim, &part_.node_global, &part_.iface_global, part_.whole_nodes, part_.whole_ifaces};
+  broadcast_state(comm_, cuts_.state, root_, root_ ? nullptr : &rows);
   cuts_.state.file = "(the run's state where its parts were cut anew)";
   if (!root_) hold_part_only();
   from_ = &cuts_.state;

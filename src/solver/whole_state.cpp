@@ -41,6 +41,36 @@ const char* const kSummedEntries[] = {"simulation/work_damping", "simulation/wor
                                       "simulation/work_ramped_loads", "model/platen_acc"};
 
 const std::string kProcessesPrefix = "processes/";
+const std::string kPartRowsMark = "processes/part_rows";  // (PartRows::mark)
+
+// The per-node or per-interface entry `name` of a D-dimensional run (null: none such).
+template <int D>
+const ItemEntry* item_entry(const std::string& name) {
+  static const std::vector<ItemEntry> items = item_entries<D>(1);  // (the platens' blocks from the size)
+  for (const ItemEntry& e : items)
+    if (name == e.name) return &e;
+  return nullptr;
+}
+
+// v's rows of the part (PartRows::keep): each block's rows ids[i], in the order of i.
+template <int D, class T>
+void keep_rows(const PartRows& p, const std::string& name, std::vector<T>& v) {
+  const ItemEntry* e = item_entry<D>(name);
+  if (!e) return;
+  const std::vector<int>& ids = e->nodes ? *p.node_global : *p.iface_global;
+  const size_t whole_n = static_cast<size_t>(e->nodes ? p.whole_nodes : p.whole_ifaces);
+  const size_t w = static_cast<size_t>(e->width), row = whole_n * w;
+  if (row == 0 || v.size() % row != 0)
+    throw InputError("the run's state at a cut: " + name + " has " + std::to_string(v.size()) +
+                     " values, not a multiple of " + std::to_string(row));
+  const size_t blocks = v.size() / row, n = ids.size();
+  std::vector<T> mine(blocks * n * w);
+  for (size_t b = 0; b < blocks; ++b)
+    for (size_t i = 0; i < n; ++i)
+      std::copy_n(v.begin() + static_cast<std::ptrdiff_t>((b * whole_n + static_cast<size_t>(ids[i])) * w), w,
+                  mine.begin() + static_cast<std::ptrdiff_t>((b * n + i) * w));
+  v = std::move(mine);
+}
 
 // An entry's values as doubles (the integer entries are flags and counts: exact).
 std::vector<double> entry_values(const StateArrays& s, const std::string& name) {
@@ -60,6 +90,25 @@ std::vector<double> take_entry(StateArrays& s, const std::string& name) {
     s.i64.erase(name);
   }
   return v;
+}
+
+// s without the per-node and per-interface entries `items` (their rows are each process's own)
+template <class Items>
+StateArrays copy_except(const StateArrays& s, const Items& items) {
+  StateArrays out;
+  auto listed = [&items](const std::string& name) {
+    for (const auto& e : items)
+      if (name == e.name) return true;
+    return false;
+  };
+  for (const auto& [name, v] : s.f64)
+    if (!listed(name)) out.f64.emplace(name, v);
+  for (const auto& [name, v] : s.i64)
+    if (!listed(name)) out.i64.emplace(name, v);
+  out.str = s.str;
+  out.file = s.file;
+  out.by_rows = s.by_rows;
+  return out;
 }
 
 void put_entry(StateArrays& s, const std::string& name, const std::vector<double>& v, bool integer) {
@@ -292,15 +341,25 @@ void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
   // they were built) stay as they are.
   StateArrays local;
   sim.save_state(local);
-  StateArrays mine = whole;
+  // this process's state: the whole state's entries but the per-node and per-interface ones, which
+  // are this part's rows of them (not a copy of the whole state: after a cut every process holds it)
+  const std::vector<ItemEntry> items = item_entries<D>(sim.m.platens.count);
+  StateArrays mine = copy_except(whole, items);
+  const bool part_rows = whole.str.count(kPartRowsMark) > 0;
+  mine.str.erase(kPartRowsMark);
   std::vector<std::string> by_rows;  // the entries read by rows from the file, and the checksum
   std::vector<uint64_t> own_hash;    // terms of this process's own rows of each
-  for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
-    if (!local.has(e.name)) continue;
+  for (const ItemEntry& e : items) {
+    if (!local.has(e.name)) {  // (not this case's: passed on as the whole state has it)
+      if (whole.f64.count(e.name)) mine.f64[e.name] = whole.f64.at(e.name);
+      if (whole.i64.count(e.name)) mine.i64[e.name] = whole.i64.at(e.name);
+      continue;
+    }
     const bool integer = local.i64.count(e.name) > 0;
-    std::vector<double> v = entry_values(local, e.name);
+    std::vector<double> v = take_entry(local, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
-    const size_t whole_n = static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces());
+    // (a part's rows already, PartRows: the rows in the part's local order)
+    const size_t whole_n = part_rows ? n : static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
     // the own nodes' rows (the exchanged ghosts' positions follow from them below); every local
     // interface's (each part computes its interfaces from the same history)
@@ -316,18 +375,21 @@ void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
       by_rows.push_back(e.name);
       own_hash.push_back(h);
     } else {
-      const std::vector<double> all = entry_values(whole, e.name);
+      std::vector<double> converted;  // (an integer entry as doubles; a double entry is read in place)
+      if (!whole.f64.count(e.name)) converted = entry_values(whole, e.name);
+      const std::vector<double>& all = whole.f64.count(e.name) ? whole.f64.at(e.name) : converted;
       if (all.size() != blocks * whole_n * w)
         throw InputError("checkpoint '" + whole.file + "': " + e.name + " has " + std::to_string(all.size()) +
                          " values, not " + std::to_string(blocks * whole_n * w) + " (the file is damaged)");
       for (size_t b = 0; b < blocks; ++b)
         for (size_t i = 0; i < rows; ++i)
           for (size_t k = 0; k < w; ++k)
-            v[(b * n + i) * w + k] = all[(b * whole_n + static_cast<size_t>(ids[i])) * w + k];
+            v[(b * n + i) * w + k] = all[(b * whole_n + (part_rows ? i : static_cast<size_t>(ids[i]))) * w + k];
     }
-    mine.f64.erase(e.name);
-    mine.i64.erase(e.name);
-    put_entry(mine, e.name, v, integer);
+    if (integer)
+      put_entry(mine, e.name, v, integer);
+    else
+      mine.f64[e.name] = std::move(v);
   }
   verify_rows(sim, whole, by_rows, own_hash);
   // the accumulators: each process its own where the count is the same, else all on process 0
@@ -346,6 +408,14 @@ void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
   if (sim.contact()) load_contact_whole(sim, whole, count, mine);
   sim.load_state(mine);  // (which ends with the ghosts taking their owners' state)
 }
+
+void PartRows::keep(const std::string& name, std::vector<double>& v) const {
+  dim == 2 ? keep_rows<2>(*this, name, v) : keep_rows<3>(*this, name, v);
+}
+void PartRows::keep(const std::string& name, std::vector<long long>& v) const {
+  dim == 2 ? keep_rows<2>(*this, name, v) : keep_rows<3>(*this, name, v);
+}
+void PartRows::mark(StateArrays& s) { s.str[kPartRowsMark] = "yes"; }
 
 template <int D>
 std::vector<double> whole_mass_momentum(const Simulation<D>& sim) {

@@ -4,6 +4,7 @@
 // the parts and given back to them. The run over processes calls these (solver/run_parts.hpp); a
 // run on one process saves and loads its Simulation's state as it is. Every function is
 // collective: every process calls it at the same step.
+#include <string>
 #include <vector>
 
 #include "io/checkpoint.hpp"
@@ -26,6 +27,21 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
 // another count. Of a checkpoint written by rows each process reads and verifies its own rows.
 template <int D>
 void load_whole_state(Simulation<D>& sim, const StateArrays& whole);
+
+// A part's rows of a whole state (a cut's, as each entry arrives: solver/run_processes.cpp), so
+// that a process other than 0 need not hold the whole state: keep() cuts each per-node and
+// per-interface entry to the rows of the part's local nodes or interfaces (node_global,
+// iface_global: local -> whole index), in their local order, and leaves the other entries; mark()
+// then tells load_whole_state that the rows are the part's already.
+struct PartRows {
+  int dim = 0;
+  const std::vector<int>* node_global = nullptr;
+  const std::vector<int>* iface_global = nullptr;
+  long whole_nodes = 0, whole_ifaces = 0;
+  void keep(const std::string& name, std::vector<double>& v) const;
+  void keep(const std::string& name, std::vector<long long>& v) const;
+  static void mark(StateArrays& s);
+};
 
 // The mass and momentum summed over every process's own nodes, and the sum of m |v_k| (the scale
 // of the momentum's round-off): 5 values (a 2D run's third momentum component 0).
