@@ -342,7 +342,7 @@ void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
   StateArrays local;
   sim.save_state(local);
   // this process's state: the whole state's entries but the per-node and per-interface ones, which
-  // are this part's rows of them (not a copy of the whole state: after a cut every process holds it)
+  // are this part's rows of them (no copy of the whole state, which process 0 holds at a cut)
   const std::vector<ItemEntry> items = item_entries<D>(sim.m.platens.count);
   StateArrays mine = copy_except(whole, items);
   const bool part_rows = whole.str.count(kPartRowsMark) > 0;

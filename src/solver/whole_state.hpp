@@ -24,7 +24,8 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
 
 // Takes such a state (or one process's checkpoint) on any number of processes: each picks the rows
 // of its own and ghost items; the accumulators go back to their processes, or all to process 0 on
-// another count. Of a checkpoint written by rows each process reads and verifies its own rows.
+// another count. Of a checkpoint written by rows each process reads and verifies its own rows; of
+// a state marked by PartRows::mark (a cut's, on a process other than 0) it takes the rows as they are.
 template <int D>
 void load_whole_state(Simulation<D>& sim, const StateArrays& whole);
 
