@@ -1244,11 +1244,12 @@ class Report:
         self.w()
         # (measured by hand: docs/parallel.md "Scale" has the runs and their commands)
         self.w("The model's other terms (issue 49: the set-up, the fragment labelling, a checkpoint and a "
-               "cut of the parts anew, each with its time and memory per process) are measured at 962 688 "
-               "tetrahedra on 2 processes in `docs/parallel.md`, \"Scale\" (2026-12-06: set-up 8.0 s, a "
-               "labelling 0.7 steps, a checkpoint 37 steps, a cut 113 steps); their extrapolation to 1e9 "
-               "tetrahedra is not written yet: the set-up and the cut still pass through process 0 (the "
-               "whole mesh and the whole state), so they would not scale as the step does.")
+               "cut of the parts anew) are extrapolated to 1e9 tetrahedra on 64 GPUs and 64 CPU nodes, and to "
+               "1e7 on this machine, by `perf/scale_model.py` from what was measured at 962 688 tetrahedra on 2 "
+               "processes (docs/parallel.md, \"Scale\", with both tables): the step, the labelling and a "
+               "checkpoint scale with the tetrahedra per process; the set-up (1.7 h and 630 GB on process 0 at "
+               "1e9) and a cut (7.8 h, the whole state on process 0) do not, until the local set-up and the "
+               "distributed cut are built.")
         self.w()
 
     def summary(self):
