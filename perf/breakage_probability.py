@@ -88,9 +88,12 @@ def fit(points):
     if not broken_W:
         return None
     hi = min(broken_W)
+    # f is searched up to 1e4 / (the largest energy): P would rise from 0 to 1 within 1e-4 of the
+    # energies' scale there; an f at that bound means the outcomes are separated
+    f_top = 1e4 / Ws[-1]
 
     def best_f(wmin):
-        lo_l, hi_l = math.log(1e-7), math.log(1.0)
+        lo_l, hi_l = math.log(1e-7), math.log(f_top)
         g = (math.sqrt(5) - 1) / 2
         for _ in range(50):
             a = hi_l - g * (hi_l - lo_l)
@@ -111,7 +114,7 @@ def fit(points):
     # At the search's upper end the outcomes are separated (every realisation below some energy
     # whole, every one above broken): the data bound fmat from below only.
     return {"fmat_kg_per_J": best[0], "Wmin_J_per_kg": best[1], "log_likelihood": best[2], "W_range": [Ws[0], Ws[-1]],
-            "fmat_at_search_bound": best[0] > 0.1}
+            "fmat_at_search_bound": best[0] > 0.99 * f_top}
 
 
 def bootstrap(rows, reps, seed):
@@ -143,7 +146,7 @@ def wilson(k, n):
     return (max(0.0, c - h), min(1.0, c + h))
 
 
-def plot(rows, f, path, title):
+def plot(rows, f, path, title, xlabel):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -158,7 +161,7 @@ def plot(rows, f, path, title):
         ax.plot(xs, [probability(x, f["fmat_kg_per_J"], f["Wmin_J_per_kg"]) for x in xs], "b-",
                 label=f"1 - exp(-{f['fmat_kg_per_J']:.3g} (W - {f['Wmin_J_per_kg']:.3g}))")
         ax.legend(fontsize=8)
-    ax.set_xlabel("mass-specific impact energy W = v^2 / 2 [J/kg]")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("P(broken)")
     ax.set_ylim(-0.03, 1.03)
     ax.set_title(title, fontsize=9)
@@ -190,6 +193,10 @@ def main():
     if a.report_only:
         old = json.load(open(a.out))
         rows, meta = old["rows"], {k: old[k] for k in ("commit", "date", "load_average")}
+        # (as the runs were made)
+        a.n, a.case, a.broken_below, a.scatter, a.set = old["n"], old["case"], old["broken_below"], old["scatter"], old["sets"]
+        a.striker_mass = old.get("striker_mass_kg", a.striker_mass)
+        a.vary = old.get("vary", "strength")
     else:
         os.makedirs(a.runs, exist_ok=True)
         rows = []
@@ -223,7 +230,10 @@ def main():
         print(f"\nfit: fmat = {f['fmat_kg_per_J']:.4g} kg/J {boot['fmat_kg_per_J_ci95']}, "
               f"Wmin = {f['Wmin_J_per_kg']:.4g} J/kg {boot['Wmin_J_per_kg_ci95']} (bootstrap 95 %)")
     if a.plot:
-        plot(rows, f, a.plot, f"{a.case}, {a.n} realisations per speed, broken: largest < {a.broken_below:g}")
+        xlabel = ("mass-specific impact energy W = M v^2 / (2 m) [J/kg]" if a.striker_mass
+                  else "mass-specific impact energy W = v^2 / 2 [J/kg]")
+        plot(rows, f, a.plot, f"{a.case}, {a.n} realisations per speed, broken: largest < {a.broken_below:g}",
+             xlabel)
 
 
 if __name__ == "__main__":
