@@ -242,6 +242,24 @@ void verify_rows(const Simulation<D>& sim, const StateArrays& whole, const std::
   }
 }
 
+// The whole mesh's rows of the per-node or per-interface entry e (one process's values v, each
+// block all of its local rows) from every process's own rows: on process 0 (empty elsewhere).
+// Collective.
+template <int D>
+std::vector<double> gather_entry(const Simulation<D>& sim, const ItemEntry& e, const std::vector<double>& v) {
+  const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
+  const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
+  const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+  std::vector<double> out;
+  for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
+    const std::vector<double> rows = gather_rows(sim.parts().comm(), v.data() + b * n * w, own, w,
+                                                 e.nodes ? sim.parts().node_global() : sim.parts().iface_global(),
+                                                 static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces()));
+    out.insert(out.end(), rows.begin(), rows.end());
+  }
+  return out;
+}
+
 }  // namespace
 
 template <int D>
@@ -285,13 +303,7 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
       rows->push_back(std::move(r));
       continue;
     }
-    std::vector<double> out;
-    for (size_t b = 0; b < blocks; ++b) {  // each block's own rows
-      const std::vector<double> rows = gather_rows(sim.parts().comm(), v.data() + b * n * w, own, w,
-                                                   e.nodes ? sim.parts().node_global() : sim.parts().iface_global(),
-                                                   static_cast<size_t>(e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces()));
-      out.insert(out.end(), rows.begin(), rows.end());
-    }
+    const std::vector<double> out = gather_entry(sim, e, v);
     if (root) put_entry(whole, e.name, out, integer);
   }
   if (root) {  // the entries every process holds alike (those gathered above stay as gathered)
@@ -427,14 +439,32 @@ std::vector<double> whole_mass_momentum(const Simulation<D>& sim) {
 
 template <int D>
 void check_whole_state(const Simulation<D>& sim, const StateArrays& given) {
-  StateArrays again;
-  save_whole_state(sim, again);
+  // The state gathered again an entry at a time, each compared on process 0 and let go of (process 0
+  // holds the given whole state already: a second whole copy would double its peak at a cut).
+  StateArrays local;
+  sim.save_state(local);
+  const bool root = sim.parts().comm().rank() == 0;
+  std::string diff;
+  for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
+    const std::string name = e.name;
+    if (name != "model/x" && name != "model/v" && name != "model/ihist" && name != "model/icontact" &&
+        name != "model/islip")
+      continue;
+    double absent = local.has(name) ? 0.0 : 1.0;  // the same decision on every process
+    sim.parts().comm().min(&absent, 1);
+    if (absent > 0) continue;
+    const std::vector<double> again = gather_entry(sim, e, take_entry(local, name));
+    if (!root || !given.has(name)) continue;
+    const bool same = given.f64.count(name) ? given.f64.at(name) == again : entry_values(given, name) == again;
+    if (!same) diff += " " + name;
+  }
+  StateArrays again;  // (the contact pairs with a history)
+  if (sim.contact()) save_contact_whole(sim, local, again);
   // each node, element and interface owned once (a duplicate would also leave one without owner)
   double owned[3] = {static_cast<double>(sim.m.owned_nodes()), static_cast<double>(sim.m.owned_elems()),
                      static_cast<double>(sim.m.owned_ifaces())};
   sim.parts().comm().sum(owned, 3);
-  if (sim.parts().comm().rank() != 0) return;
-  std::string diff;
+  if (!root) return;
   const double whole[3] = {static_cast<double>(sim.parts().whole_nodes()), static_cast<double>(sim.parts().whole_elems()),
                            static_cast<double>(sim.parts().whole_ifaces())};
   const char* what[3] = {"nodes", "elements", "interfaces"};
@@ -442,8 +472,6 @@ void check_whole_state(const Simulation<D>& sim, const StateArrays& given) {
     if (owned[k] != whole[k])
       diff += std::string(" ") + what[k] + " owned " + std::to_string(static_cast<long>(owned[k])) + " times for " +
               std::to_string(static_cast<long>(whole[k]));
-  for (const char* name : {"model/x", "model/v", "model/ihist", "model/icontact", "model/islip"})
-    if (given.has(name) && entry_values(given, name) != entry_values(again, name)) diff += std::string(" ") + name;
   if (sim.contact()) {  // the pairs with a history, in any order
     const size_t w = ContactSystem<D>::kPairRow;
     auto rows = [w](const std::vector<double>& v) {
