@@ -260,6 +260,31 @@ std::vector<double> gather_entry(const Simulation<D>& sim, const ItemEntry& e, c
   return out;
 }
 
+// This process's own rows of the entry e (its values v, each block all of its local rows) for
+// write_checkpoint_rows; a one-block entry's own rows come first and move in without a copy.
+template <int D>
+RowPart own_row_part(const Simulation<D>& sim, const ItemEntry& e, std::vector<double> v, bool integer) {
+  const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
+  const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
+  const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
+  RowPart r;
+  r.name = e.name;
+  r.integer = integer;
+  r.whole_rows = e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces();
+  r.blocks = e.blocks;
+  r.width = e.width;
+  r.ids = e.nodes ? &sim.parts().node_global() : &sim.parts().iface_global();
+  r.own = own;
+  if (blocks == 1) {
+    v.resize(own * w);  // (the ghost rows' capacity stays: a few per cent)
+    r.values = std::move(v);
+  } else {
+    for (size_t b = 0; b < blocks; ++b)
+      r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
+  }
+  return r;
+}
+
 }  // namespace
 
 template <int D>
@@ -279,28 +304,12 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
     const bool integer = local.i64.count(e.name) > 0;
     std::vector<double> v = take_entry(local, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
-    const size_t own = static_cast<size_t>(e.nodes ? sim.m.owned_nodes() : sim.m.owned_ifaces());
     const size_t w = static_cast<size_t>(e.width), blocks = static_cast<size_t>(e.blocks);
     if (v.size() != blocks * n * w)
       throw InputError("checkpoint: " + std::string(e.name) + " has " + std::to_string(v.size()) +
                        " values, not " + std::to_string(blocks * n * w));
     if (rows) {  // each process writes its own rows (io/checkpoint.hpp: write_checkpoint_rows)
-      RowPart r;
-      r.name = e.name;
-      r.integer = integer;
-      r.whole_rows = e.nodes ? sim.parts().whole_nodes() : sim.parts().whole_ifaces();
-      r.blocks = e.blocks;
-      r.width = e.width;
-      r.ids = e.nodes ? &sim.parts().node_global() : &sim.parts().iface_global();
-      r.own = own;
-      if (blocks == 1) {  // the own rows come first: no copy
-        v.resize(own * w);  // (the ghost rows' capacity stays: a few per cent)
-        r.values = std::move(v);
-      } else {
-        for (size_t b = 0; b < blocks; ++b)
-          r.values.insert(r.values.end(), v.begin() + b * n * w, v.begin() + (b * n + own) * w);
-      }
-      rows->push_back(std::move(r));
+      rows->push_back(own_row_part(sim, e, std::move(v), integer));
       continue;
     }
     const std::vector<double> out = gather_entry(sim, e, v);
