@@ -92,23 +92,26 @@ std::vector<double> take_entry(StateArrays& s, const std::string& name) {
   return v;
 }
 
-// s without the per-node and per-interface entries `items` (their rows are each process's own)
-template <class Items>
-StateArrays copy_except(const StateArrays& s, const Items& items) {
+// s without its per-node and per-interface entries (their rows are each process's own)
+template <int D>
+StateArrays copy_except_items(const StateArrays& s) {
   StateArrays out;
-  auto listed = [&items](const std::string& name) {
-    for (const auto& e : items)
-      if (name == e.name) return true;
-    return false;
-  };
   for (const auto& [name, v] : s.f64)
-    if (!listed(name)) out.f64.emplace(name, v);
+    if (!item_entry<D>(name)) out.f64.emplace(name, v);
   for (const auto& [name, v] : s.i64)
-    if (!listed(name)) out.i64.emplace(name, v);
+    if (!item_entry<D>(name)) out.i64.emplace(name, v);
   out.str = s.str;
   out.file = s.file;
   out.by_rows = s.by_rows;
   return out;
+}
+
+// Whether some process holds the entry (the same answer on every process: collective).
+template <int D>
+bool held_somewhere(const Simulation<D>& sim, const StateArrays& local, const std::string& name) {
+  double absent = local.has(name) ? 0.0 : 1.0;
+  sim.parts().comm().min(&absent, 1);
+  return absent == 0;
 }
 
 void put_entry(StateArrays& s, const std::string& name, const std::vector<double>& v, bool integer) {
@@ -298,9 +301,7 @@ void save_whole_state(const Simulation<D>& sim, StateArrays& whole, std::vector<
   // again in its rows (and on process 0 a third time in a copy of `local`): the checkpoint's and the
   // cut's peak memory. Process 0 keeps what is left (the entries every process holds alike) after.
   for (const ItemEntry& e : item_entries<D>(sim.m.platens.count)) {
-    double absent = local.has(e.name) ? 0.0 : 1.0;  // the same decision on every process
-    sim.parts().comm().min(&absent, 1);
-    if (absent > 0) continue;
+    if (!held_somewhere(sim, local, e.name)) continue;
     const bool integer = local.i64.count(e.name) > 0;
     std::vector<double> v = take_entry(local, e.name);
     const size_t n = static_cast<size_t>(e.nodes ? sim.m.nn : sim.m.ni);
@@ -365,7 +366,7 @@ void load_whole_state(Simulation<D>& sim, const StateArrays& whole) {
   // this process's state: the whole state's entries but the per-node and per-interface ones, which
   // are this part's rows of them (no copy of the whole state, which process 0 holds at a cut)
   const std::vector<ItemEntry> items = item_entries<D>(sim.m.platens.count);
-  StateArrays mine = copy_except(whole, items);
+  StateArrays mine = copy_except_items<D>(whole);
   const bool part_rows = whole.str.count(kPartRowsMark) > 0;
   mine.str.erase(kPartRowsMark);
   std::vector<std::string> by_rows;  // the entries read by rows from the file, and the checksum
@@ -459,9 +460,7 @@ void check_whole_state(const Simulation<D>& sim, const StateArrays& given) {
     if (name != "model/x" && name != "model/v" && name != "model/ihist" && name != "model/icontact" &&
         name != "model/islip")
       continue;
-    double absent = local.has(name) ? 0.0 : 1.0;  // the same decision on every process
-    sim.parts().comm().min(&absent, 1);
-    if (absent > 0) continue;
+    if (!held_somewhere(sim, local, name)) continue;
     const std::vector<double> again = gather_entry(sim, e, take_entry(local, name));
     if (!root || !given.has(name)) continue;
     const bool same = given.f64.count(name) ? given.f64.at(name) == again : entry_values(given, name) == again;
