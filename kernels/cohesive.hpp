@@ -60,6 +60,23 @@ KOKKOS_FORCEINLINE_FUNCTION double cohesive_damage(const CohesivePoint& s) {
 // Energy dissipated per unit area so far.
 KOKKOS_INLINE_FUNCTION double cohesive_dissipation(const CohesivePoint& s) { return s.wd; }
 
+// The initiation test of an undamaged point at separation (dn normal, ds = |tangential|): its
+// elastic tractions tn_e = kn dn and ts_e = ks ds against the tension cut-off (tensile: tn_e >= ft)
+// and the Mohr-Coulomb envelope (shear: ts_e >= c + sigc tan(phi), sigc = <-tn_e>+ the compression).
+struct Initiation {
+  double tn_e, ts_e, sigc;
+  bool tensile, shear;
+};
+KOKKOS_FORCEINLINE_FUNCTION Initiation initiation_test(const CohesiveParams& p, double dn, double ds) {
+  Initiation t;
+  t.tn_e = p.kn * dn;
+  t.ts_e = p.ks * ds;
+  t.sigc = kselect(t.tn_e < 0.0, -t.tn_e, 0.0);
+  t.tensile = t.tn_e >= p.ft;
+  t.shear = t.ts_e >= p.c + t.sigc * p.tanphi;
+  return t;
+}
+
 // Updates the history with the separation (dn normal, ds = |tangential|) and returns the
 // tractions: tn (tension positive) and the secant shear stiffness kss so that the shear traction
 // vector is kss * delta_s_vector. Also returns the damage D.
@@ -93,11 +110,9 @@ KOKKOS_FORCEINLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double
   }
   if (s.dm0 <= 0.0) {
     // Undamaged: initiation check on the elastic tractions (tensile failure has priority).
-    const double tn_e = p.kn * dn;
-    const double ts_e = p.ks * ds;
-    const double sigc = kselect(tn_e < 0.0, -tn_e, 0.0);
-    const bool tensile = tn_e >= p.ft;
-    const bool shear = ts_e >= p.c + sigc * p.tanphi;
+    const Initiation t = initiation_test(p, dn, ds);
+    const double tn_e = t.tn_e, ts_e = t.ts_e, sigc = t.sigc;
+    const bool tensile = t.tensile, shear = t.shear;
     if ((tensile || shear) && dm > 0.0) {
       const double Gn = 0.5 * p.kn * dnp * dnp;
       const double GS = 0.5 * p.ks * ds * ds;

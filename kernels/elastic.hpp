@@ -9,58 +9,56 @@ namespace fdem {
 
 // Deformation gradient of a simplex. x[a][i]: current coordinates of its D+1 nodes; G[b][j] =
 // dN_{b+1}/dX_j (reference gradients of nodes 1..D; node 0's gradient is minus their sum).
-template <int D>
-KOKKOS_INLINE_FUNCTION void deformation_gradient(const double (&x)[D + 1][D], const double (&G)[D][D],
-                                                 double (&F)[D][D]) {
+template <int D, class T = double>
+KOKKOS_INLINE_FUNCTION void deformation_gradient(const T (&x)[D + 1][D], const T (&G)[D][D], T (&F)[D][D]) {
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) {
-      double s = 0;
+      T s = 0.0;
       for (int b = 0; b < D; ++b) s += (x[b + 1][i] - x[0][i]) * G[b][j];
       F[i][j] = s;
     }
 }
 
 // Second Piola-Kirchhoff stress S and strain energy density from F (SVK).
-template <int D>
-KOKKOS_INLINE_FUNCTION double svk_stress(const double (&F)[D][D], double lambda, double mu,
-                                         double (&S)[D][D]) {
-  double E[D][D];
-  double tr = 0;
+template <int D, class T = double>
+KOKKOS_INLINE_FUNCTION T svk_stress(const T (&F)[D][D], const T& lambda, const T& mu, T (&S)[D][D]) {
+  T E[D][D];
+  T tr = 0.0;
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) {
-      double s = 0;
+      T s = 0.0;
       for (int k = 0; k < D; ++k) s += F[k][i] * F[k][j];
       E[i][j] = 0.5 * (s - (i == j ? 1.0 : 0.0));
     }
   for (int i = 0; i < D; ++i) tr += E[i][i];
-  double ee = 0;
+  T ee = 0.0;
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) {
-      S[i][j] = 2.0 * mu * E[i][j] + (i == j ? lambda * tr : 0.0);
+      S[i][j] = 2.0 * mu * E[i][j] + (i == j ? lambda * tr : T(0.0));
       ee += E[i][j] * E[i][j];
     }
   return 0.5 * lambda * tr * tr + mu * ee;
 }
 
 // Internal nodal forces (force acting on each node, i.e. minus the internal force vector) of one
-// element; returns its strain energy V0 * W.
-template <int D>
-KOKKOS_INLINE_FUNCTION double element_forces(const double (&x)[D + 1][D], const double (&G)[D][D],
-                                             double vol0, double lambda, double mu,
-                                             double (&f)[D + 1][D]) {
-  double F[D][D], S[D][D], P[D][D];
-  deformation_gradient<D>(x, G, F);
-  const double w = svk_stress<D>(F, lambda, mu, S);
+// element; returns its strain energy V0 * W. T: double, or Lanes<W> (kernels/lanes.hpp) for W
+// elements at once.
+template <int D, class T = double>
+KOKKOS_INLINE_FUNCTION T element_forces(const T (&x)[D + 1][D], const T (&G)[D][D], const T& vol0,
+                                        const T& lambda, const T& mu, T (&f)[D + 1][D]) {
+  T F[D][D], S[D][D], P[D][D];
+  deformation_gradient<D, T>(x, G, F);
+  const T w = svk_stress<D, T>(F, lambda, mu, S);
   for (int i = 0; i < D; ++i)
     for (int j = 0; j < D; ++j) {
-      double s = 0;
+      T s = 0.0;
       for (int k = 0; k < D; ++k) s += F[i][k] * S[k][j];
       P[i][j] = s;
     }
-  for (int i = 0; i < D; ++i) f[0][i] = 0;
+  for (int i = 0; i < D; ++i) f[0][i] = 0.0;
   for (int b = 0; b < D; ++b)
     for (int i = 0; i < D; ++i) {
-      double s = 0;
+      T s = 0.0;
       for (int j = 0; j < D; ++j) s += P[i][j] * G[b][j];
       f[b + 1][i] = -vol0 * s;
       f[0][i] += vol0 * s;

@@ -5,6 +5,7 @@
 #include "kernels/cohesive.hpp"
 #include "kernels/elastic.hpp"
 #include "kernels/interface.hpp"
+#include "kernels/lanes.hpp"
 #include "kernels/model.hpp"
 
 namespace fdem {
@@ -41,6 +42,27 @@ struct BulkForces {
     for (int a = 0; a < D + 1; ++a)
       for (int i = 0; i < D; ++i) acc(el.elem(e, a), i) += fe[a][i];
   }
+
+#if FDEM_HOST_LANES
+  // Elements e0 .. e0 + kLanes - 1 at once: the same forces as operator() gives each, to the bit,
+  // scattered element after element as operator() would.
+  template <class Acc>
+  void batch(const int e0, Acc& acc) const {
+    using L = HostLanes;
+    L xe[D + 1][D], G[D][D], fe[D + 1][D];
+    for (int a = 0; a < D + 1; ++a)
+      for (int i = 0; i < D; ++i) xe[a][i] = L::gather([&](int w) { return x(el.elem(e0 + w, a), i); });
+    for (int b = 0; b < D; ++b)
+      for (int j = 0; j < D; ++j) G[b][j] = L::gather([&](int w) { return el.grad(e0 + w, b, j); });
+    const L vol = L::gather([&](int w) { return el.vol0(e0 + w); });
+    const L lam = L::gather([&](int w) { return el.mat(el.emat(e0 + w), 0); });
+    const L mu = L::gather([&](int w) { return el.mat(el.emat(e0 + w), 1); });
+    element_forces<D, L>(xe, G, vol, lam, mu, fe);
+    for (int w = 0; w < kLanes; ++w)
+      for (int a = 0; a < D + 1; ++a)
+        for (int i = 0; i < D; ++i) acc(el.elem(e0 + w, a), i) += fe[a][i][w];
+  }
+#endif
 };
 
 // The interface part: interface q's history and, while it carries, its forces. PerIface: the
@@ -100,6 +122,71 @@ struct InterfaceForces {
       }
     }
   }
+
+#if FDEM_HOST_LANES
+  // Interfaces q0 .. q0 + kLanes - 1 at once. Those that are intact and stay so in this step (not
+  // handed over, every point undamaged and none meeting its initiation test) take the lanes'
+  // forces: the elastic branch of cohesive_update (tn = kn dn, kss = ks, the history unchanged and
+  // not written), the same operations as operator() in the same order, so the same bits. The
+  // others go through operator() in their turn, so that the scatter keeps the interfaces' order.
+  template <class Acc>
+  void batch(const int q0, Acc& acc) const {
+    using L = HostLanes;
+    bool fast[kLanes];
+    CohesiveParams pw[kLanes];
+    bool any = false;
+    for (int w = 0; w < kLanes; ++w) {
+      const int q = q0 + w;
+      fast[w] = !in.icontact(q);
+      for (int k = 0; k < D; ++k) fast[w] = fast[w] && load_point(in.ihist, q, k).dm0 <= 0.0;
+      any = any || fast[w];
+      pw[w] = PerIface ? in.params(q) : in.coh;
+    }
+    const L kn = L::gather([&](int w) { return pw[w].kn; });
+    const L ks = L::gather([&](int w) { return pw[w].ks; });
+    const L ap = L::gather([&](int w) { return in.iarea(q0 + w); });
+    L xa[D][D], xb[D][D];
+    for (int k = 0; k < D; ++k)
+      for (int i = 0; i < D; ++i) {
+        xa[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, k), i); });
+        xb[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, D + k), i); });
+      }
+    if (!any) {
+      for (int w = 0; w < kLanes; ++w) (*this)(q0 + w, acc);
+      return;
+    }
+    L n[D], ap_cur, g[D], fa[D][D], fb[D][D];
+    interface_frame<D, L>(xa, xb, L(1.0), n, ap_cur);
+    for (int i = 0; i < D; ++i) g[i] = 0.0;
+    for (int k = 0; k < D; ++k) {
+      L d[D], dn, ds[D], ds2;
+      for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
+      point_separation<D, L>(d, n, dn, ds, ds2);
+      const L dsl = lane_sqrt(ds2);
+      for (int w = 0; w < kLanes; ++w)
+        if (fast[w]) {
+          const Initiation t = initiation_test(pw[w], dn[w], dsl[w]);
+          fast[w] = !(t.tensile || t.shear);
+        }
+      point_forces<D, L>(d, n, ap, kn * dn, ks, dn, ds, fa[k], fb[k], g);
+    }
+    L e[D - 1][D], dm[D][D];
+    mid_edges<D, L>(xa, xb, e);
+    interface_normal_forces<D, L>(e, n, g, dm);
+    for (int w = 0; w < kLanes; ++w) {
+      if (!fast[w]) {
+        (*this)(q0 + w, acc);
+        continue;
+      }
+      const int q = q0 + w;
+      for (int k = 0; k < D; ++k)
+        for (int i = 0; i < D; ++i) {
+          acc(in.iface(q, k), i) += fa[k][i][w] - 0.5 * dm[k][i][w];
+          acc(in.iface(q, D + k), i) += fb[k][i][w] - 0.5 * dm[k][i][w];
+        }
+    }
+  }
+#endif
 };
 
 // The interface part point by point, for the GPU (the split path of run_force_kernels): the
@@ -259,17 +346,31 @@ struct LeanInterfaceForces {
 
 // Host backends: work item c is element chunk c with the interfaces whose side A lies in it
 // (Model::ichunk: one pass over the nodes, side A's positions and forces are still in cache).
+// lanes: kLanes items at a time (BulkForces::batch, InterfaceForces::batch), the same results to
+// the bit as one at a time (false: the benchmarks' and tests' reference).
 template <int D, bool PerIface, bool Fric>
 struct FusedForceKernel {
   BulkForces<D> bulk;
   InterfaceForces<D, PerIface, Fric> iface;
   ForceScatter<D> sf;
+  bool lanes = true;
 
   KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
     auto acc = sf.access();
     const int e1 = kmin((c + 1) * kChunk, bulk.el.bulk_elems());
-    for (int e = c * kChunk; e < e1; ++e) bulk(e, acc);
-    for (int q = iface.in.ichunk(c); q < iface.in.ichunk(c + 1); ++q) iface(q, acc);
+    int e = c * kChunk;
+    const int q1 = iface.in.ichunk(c + 1);
+    int q = iface.in.ichunk(c);
+#if FDEM_HOST_LANES
+    if (lanes)
+      for (; e + kLanes <= e1; e += kLanes) bulk.batch(e, acc);
+#endif
+    for (; e < e1; ++e) bulk(e, acc);
+#if FDEM_HOST_LANES
+    if (lanes)
+      for (; q + kLanes <= q1; q += kLanes) iface.batch(q, acc);
+#endif
+    for (; q < q1; ++q) iface(q, acc);
   }
 };
 
@@ -304,13 +405,13 @@ using BulkLaunchBounds = Kokkos::LaunchBounds<>;
 // contributes). The interface kernel of the split runs under ForceLaunchBounds
 // (kernels/fdem_kokkos.hpp), the bulk kernel under BulkLaunchBounds.
 template <int D, bool PerIface, bool Fric>
-void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int nbc) {
+void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int nbc, bool lanes) {
   const BulkForces<D> bulk{m.x, m.elements()};
   if constexpr (kChunk > 1) {  // host backends (a device build compiles no fused kernel)
     if (fused) {
       const InterfaceForces<D, PerIface, Fric> iface{m.x, m.v, m.interfaces()};
       Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc),
-                           FusedForceKernel<D, PerIface, Fric>{bulk, iface, sf});
+                           FusedForceKernel<D, PerIface, Fric>{bulk, iface, sf, lanes});
       return;
     }
   }
@@ -326,17 +427,19 @@ void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int n
                              LeanInterfaceForces<D, PerIface, Fric>{m.x, m.v, m.interfaces()}, sf, ni});
 }
 
+// lanes = false: the host's fused pass one item at a time (FusedForceKernel::lanes; the same
+// results).
 template <int D>
-void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = true) {
+void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = true, bool lanes = true) {
   const int nbc = (m.ne + kChunk - 1) / kChunk;
   const bool fused = kChunk > 1 && static_cast<int>(m.ichunk.extent(0)) == nbc + 1;
   sf.reset();
   if (m.per_interface()) {
-    if (m.has_slip()) run_force_kernels<D, true, true>(m, sf, fused, nbc);
-    else run_force_kernels<D, true, false>(m, sf, fused, nbc);
+    if (m.has_slip()) run_force_kernels<D, true, true>(m, sf, fused, nbc, lanes);
+    else run_force_kernels<D, true, false>(m, sf, fused, nbc, lanes);
   } else {
-    if (m.has_slip()) run_force_kernels<D, false, true>(m, sf, fused, nbc);
-    else run_force_kernels<D, false, false>(m, sf, fused, nbc);
+    if (m.has_slip()) run_force_kernels<D, false, true>(m, sf, fused, nbc, lanes);
+    else run_force_kernels<D, false, false>(m, sf, fused, nbc, lanes);
   }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;

@@ -5,30 +5,32 @@
 // the force kernel (kernels/forces.hpp) and the contact handover call them.
 #include "kernels/cohesive.hpp"
 #include "kernels/fdem_kokkos.hpp"
+#include "kernels/lanes.hpp"
 
 namespace fdem {
 
 // Geometry of an interface: unit normal n (from side A to side B) of the mid-surface and the
 // tributary area of each integration point (nodal integration: one point per node pair) in the
 // current configuration. The forces use the reference area (tractions per unit reference area,
-// so that they derive from a stored energy); the current one serves the set-up.
-template <int D>
-KOKKOS_FORCEINLINE_FUNCTION void interface_frame(const double (&xa)[D][D], const double (&xb)[D][D],
-                                            double thickness, double (&n)[D], double& area_pt) {
-  double m[D][D];
+// so that they derive from a stored energy); the current one serves the set-up. T: double, or
+// Lanes<W> (kernels/lanes.hpp) for W interfaces at once (as the other functions with a T below).
+template <int D, class T = double>
+KOKKOS_FORCEINLINE_FUNCTION void interface_frame(const T (&xa)[D][D], const T (&xb)[D][D], const T& thickness,
+                                                 T (&n)[D], T& area_pt) {
+  T m[D][D];
   for (int k = 0; k < D; ++k)
     for (int i = 0; i < D; ++i) m[k][i] = 0.5 * (xa[k][i] + xb[k][i]);
   if constexpr (D == 2) {
-    const double tx = m[1][0] - m[0][0], ty = m[1][1] - m[0][1];
-    const double L = kmath::sqrt(tx * tx + ty * ty);
+    const T tx = m[1][0] - m[0][0], ty = m[1][1] - m[0][1];
+    const T L = lane_sqrt(tx * tx + ty * ty);
     n[0] = ty / L;
     n[1] = -tx / L;
     area_pt = 0.5 * L * thickness;
   } else {
-    const double a[3] = {m[1][0] - m[0][0], m[1][1] - m[0][1], m[1][2] - m[0][2]};
-    const double b[3] = {m[2][0] - m[0][0], m[2][1] - m[0][1], m[2][2] - m[0][2]};
-    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    const double len = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const T a[3] = {m[1][0] - m[0][0], m[1][1] - m[0][1], m[1][2] - m[0][2]};
+    const T b[3] = {m[2][0] - m[0][0], m[2][1] - m[0][1], m[2][2] - m[0][2]};
+    T c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const T len = lane_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
     for (int i = 0; i < D; ++i) n[i] = c[i] / len;
     area_pt = 0.5 * len / 3.0;
   }
@@ -195,6 +197,32 @@ struct SlipInArrays {
   }
 };
 
+// A point's separation d (B node less A node) split along the unit normal n: dn = d . n, the
+// tangential part ds and its square ds2.
+template <int D, class T = double>
+KOKKOS_FORCEINLINE_FUNCTION void point_separation(const T (&d)[D], const T (&n)[D], T& dn, T (&ds)[D], T& ds2) {
+  dn = 0.0;
+  for (int i = 0; i < D; ++i) dn += d[i] * n[i];
+  ds2 = 0.0;
+  for (int i = 0; i < D; ++i) {
+    ds[i] = d[i] - dn * n[i];
+    ds2 += ds[i] * ds[i];
+  }
+}
+
+// A point's forces from its tractions (normal tn, secant shear stiffness kss) on area ap: fa on its
+// A node, fb on its B node (without the normal's change), and its share of g = dU/dn.
+template <int D, class T = double>
+KOKKOS_FORCEINLINE_FUNCTION void point_forces(const T (&d)[D], const T (&n)[D], const T& ap, const T& tn,
+                                              const T& kss, const T& dn, const T (&ds)[D], T (&fa)[D], T (&fb)[D],
+                                              T (&g)[D]) {
+  for (int i = 0; i < D; ++i) {
+    fa[i] = ap * (tn * n[i] + kss * ds[i]);
+    fb[i] = -fa[i];
+    g[i] += ap * (tn - kss * dn) * d[i];
+  }
+}
+
 // One point's share of interface_forces: updates its history and returns its damage; d: its
 // separation (B node less A node); fa, fb: the forces on its node pair without the normal's change
 // (interface_normal_forces); g += dU/dn. Fric: a softening point's residual friction through the
@@ -203,22 +231,13 @@ template <int D, bool Fric, class Friction>
 KOKKOS_FORCEINLINE_FUNCTION double interface_point_forces(const double (&d)[D], const double (&n)[D], double ap,
                                                      const CohesiveParams& p, CohesivePoint& h, Friction& fr,
                                                      double (&fa)[D], double (&fb)[D], double (&g)[D]) {
-  double ds[D], dn = 0;
-  for (int i = 0; i < D; ++i) dn += d[i] * n[i];
-  double ds2 = 0;
-  for (int i = 0; i < D; ++i) {
-    ds[i] = d[i] - dn * n[i];
-    ds2 += ds[i] * ds[i];
-  }
+  double ds[D], dn, ds2;
+  point_separation<D>(d, n, dn, ds, ds2);
   double tn, kss, dmg;
   const double dmg0 = Fric ? cohesive_damage(h) : 0.0;
   const bool fresh = !(h.dm0 > 0.0);
   cohesive_update(p, dn, kmath::sqrt(ds2), h, tn, kss, dmg);
-  for (int i = 0; i < D; ++i) {
-    fa[i] = ap * (tn * n[i] + kss * ds[i]);
-    fb[i] = -fa[i];
-    g[i] += ap * (tn - kss * dn) * d[i];
-  }
+  point_forces<D>(d, n, ap, tn, kss, dn, ds, fa, fb, g);
   if constexpr (Fric) {
     if (p.tanphir >= 0.0 && dmg > 0.0)
       fr.friction(p, n, d, dn, ds, ap, kss * kmath::sqrt(ds2), dmg - dmg0, fresh, h, fa, fb, g);
@@ -236,26 +255,26 @@ KOKKOS_FORCEINLINE_FUNCTION double interface_point_forces(const double (&d)[D], 
 
 // The mid-surface's edges from its first point, m_k - m_0 with m_k = (xa_k + xb_k) / 2 (k >= 1):
 // what the normal's change needs of the positions (interface_normal_forces).
-template <int D>
-KOKKOS_FORCEINLINE_FUNCTION void mid_edges(const double (&xa)[D][D], const double (&xb)[D][D], double (&e)[D - 1][D]) {
+template <int D, class T = double>
+KOKKOS_FORCEINLINE_FUNCTION void mid_edges(const T (&xa)[D][D], const T (&xb)[D][D], T (&e)[D - 1][D]) {
   for (int k = 1; k < D; ++k)
     for (int i = 0; i < D; ++i) e[k - 1][i] = 0.5 * (xa[k][i] + xb[k][i] - xa[0][i] - xb[0][i]);
 }
 
 // The forces of the normal's change: dm[k] = dU/dm_k through the mid-surface points
 // m_k = (xa_k + xb_k) / 2 from g = dU/dn; each node of pair k takes -dm[k] / 2. e: mid_edges.
-template <int D>
-KOKKOS_FORCEINLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1][D], const double (&n)[D],
-                                                    const double (&g)[D], double (&dm)[D][D]) {
-  double gp[D], gn = 0;  // projection (I - n n^T) g
+template <int D, class T = double>
+KOKKOS_FORCEINLINE_FUNCTION void interface_normal_forces(const T (&e)[D - 1][D], const T (&n)[D], const T (&g)[D],
+                                                         T (&dm)[D][D]) {
+  T gp[D], gn = 0.0;  // projection (I - n n^T) g
   for (int i = 0; i < D; ++i) gn += g[i] * n[i];
   for (int i = 0; i < D; ++i) gp[i] = g[i] - gn * n[i];
   if constexpr (D == 2) {
     // n = (t_y, -t_x) / L with t = m1 - m0: dU/dt = (1/L) R^T gp, R^T (gx, gy) = (-gy, gx)
-    const double tx = e[0][0];
-    const double ty = e[0][1];
-    const double L = kmath::sqrt(tx * tx + ty * ty);
-    const double Gt[2] = {-gp[1] / L, gp[0] / L};
+    const T tx = e[0][0];
+    const T ty = e[0][1];
+    const T L = lane_sqrt(tx * tx + ty * ty);
+    const T Gt[2] = {-gp[1] / L, gp[0] / L};
     for (int i = 0; i < 2; ++i) {
       dm[1][i] = Gt[i];
       dm[0][i] = -Gt[i];
@@ -263,13 +282,13 @@ KOKKOS_FORCEINLINE_FUNCTION void interface_normal_forces(const double (&e)[D - 1
   } else {
     // n = c / |c|, c = a x b, a = m1 - m0, b = m2 - m0: dU/dc = gp / |c|,
     // dU/da = b x hc, dU/db = hc x a
-    const double(&a)[3] = e[0];
-    const double(&b)[3] = e[1];
-    const double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    const double cl = kmath::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    const double hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
-    const double da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
-    const double db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
+    const T(&a)[3] = e[0];
+    const T(&b)[3] = e[1];
+    const T c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    const T cl = lane_sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    const T hc[3] = {gp[0] / cl, gp[1] / cl, gp[2] / cl};
+    const T da[3] = {b[1] * hc[2] - b[2] * hc[1], b[2] * hc[0] - b[0] * hc[2], b[0] * hc[1] - b[1] * hc[0]};
+    const T db[3] = {hc[1] * a[2] - hc[2] * a[1], hc[2] * a[0] - hc[0] * a[2], hc[0] * a[1] - hc[1] * a[0]};
     for (int i = 0; i < 3; ++i) {
       dm[1][i] = da[i];
       dm[2][i] = db[i];

@@ -185,9 +185,12 @@ struct KernelSet {
     names = {"step", "step_sampled", "yardstick"};
     fns = {[s]() { s->step(false); }, [s]() { s->step(true); }, [y]() { y->step(); }};
     if (kernels) {
-      names.insert(names.end(), {"forces", "scatter_reset", "scatter_contribute", "nodes", "nodes_sampled",
-                                 "strain_energy", "interface_state"});
+      names.insert(names.end(), {"forces", "forces_one_at_a_time", "scatter_reset", "scatter_contribute", "nodes",
+                                 "nodes_sampled", "strain_energy", "interface_state"});
       fns.push_back([this, m]() { compute_forces<D>(*m, sf); });
+      // the host's fused pass without its lanes (FusedForceKernel::lanes): their gain, timed
+      // interleaved with the pass that has them
+      fns.push_back([this, m]() { compute_forces<D>(*m, sf, true, false); });
       fns.push_back([this]() { sf.reset(); });
       fns.push_back([this, m]() { Kokkos::Experimental::contribute(m->f, sf); });
       fns.push_back([s]() { s->update_nodes_now(false); });
@@ -209,7 +212,7 @@ struct KernelSet {
     before.resize(fns.size());
     after.resize(fns.size());
     for (size_t k = 0; k < names.size(); ++k) {
-      if (names[k] == "forces" || names[k] == "scatter_contribute")
+      if (names[k] == "forces" || names[k] == "forces_one_at_a_time" || names[k] == "scatter_contribute")
         after[k] = [m]() { Kokkos::deep_copy(m->f, 0.0); };
       if (names[k] == "nodes" || names[k] == "nodes_sampled") {
         before[k] = [this, m]() {
@@ -248,6 +251,7 @@ std::vector<Row> make_rows(const std::vector<std::string>& names, const std::vec
   fk.median = F.median - r.median - q.median;
   fk.min = fk.max = fk.median;
   rows.push_back({"forces_compute", fk, tr.bulk + tr.iface, true});
+  rows.push_back({"forces_one_at_a_time", stat_of("forces_one_at_a_time"), forces_bytes});
   rows.push_back({"scatter_reset", r, tr.reset});
   rows.push_back({"scatter_contribute", q, tr.contribute});
   if (contact) rows.push_back({"contact", stat_of("contact"), 0.0});

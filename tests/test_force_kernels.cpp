@@ -2,7 +2,10 @@
 // chunks with their interfaces, on GPUs (and wherever Model::ichunk is absent) a bulk kernel and an
 // interface kernel. Both must give the same nodal forces (to round-off: the scatter adds in
 // another order) and exactly the same interface histories, with and without residual friction.
-// Host backends run both shapes, so the GPU's shape is checked here without a GPU.
+// Host backends run both shapes, so the GPU's shape is checked here without a GPU. The host's
+// fused pass takes its items kLanes at a time (Lanes, kernels/lanes.hpp): that must give the same
+// forces and histories to the bit as one at a time, whatever mix of intact, initiating, softening
+// and failed interfaces a batch holds.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,7 +21,7 @@ using namespace fdem;
 
 // A cracked block whose interfaces initiate and soften under the displacement field below.
 template <int D>
-Case weak_case(bool friction) {
+Case weak_case(bool friction, bool scatter = false) {
   auto c = fdem_test::basic_case(D);
   auto im = fdem_test::strong_interface(33e9 / (0.1 * 0.01), 13e9 / (0.1 * 0.01));
   im.ft = 2e6;
@@ -31,6 +34,10 @@ Case weak_case(bool friction) {
   c.interface_materials = {im};
   c.fracture_material = 0;
   c.contact.enabled = 0;
+  if (scatter) {  // per-interface strengths: the force kernel's PerIface shape
+    c.scatter.distribution = "weibull";
+    c.scatter.modulus = 3;
+  }
   return c;
 }
 
@@ -49,23 +56,26 @@ void displace(Simulation<D>& sim, double amp) {
 struct Pass {
   std::vector<double> f, hist;
   double fmax = 0;
-  int softening = 0;
+  int softening = 0, failed = 0;
 };
 
+enum class Shape { split, fused, fused_one_at_a_time };
+
 template <int D>
-Pass force_pass(bool split, bool friction, int calls) {
-  Simulation<D> sim(weak_case<D>(friction), fdem_test::cracked_block<D>(D == 2 ? 8 : 4));
+Pass force_pass(Shape shape, bool friction, int calls, bool scatter = false, double amp = 4e-6) {
+  Simulation<D> sim(weak_case<D>(friction, scatter), fdem_test::cracked_block<D>(D == 2 ? 8 : 4));
   EXPECT_GT(sim.m.ni, 0);
   EXPECT_EQ(sim.m.has_slip(), friction);
+  EXPECT_EQ(sim.m.per_interface(), scatter);
   Model<D> m = sim.m;  // a shallow copy (the same Views)
-  if (split) m.ichunk = Kokkos::View<int*>();
+  if (shape == Shape::split) m.ichunk = Kokkos::View<int*>();
   else EXPECT_EQ(static_cast<int>(m.ichunk.extent(0)), (m.ne + kChunk - 1) / kChunk + 1) << "not the fused shape";
   Pass p;
   for (int c = 0; c < calls; ++c) {  // the history evolves from call to call
-    displace(sim, 4e-6 * (c + 1));
+    displace(sim, amp * (c + 1));
     Kokkos::deep_copy(sim.m.f, 0.0);
     ForceScatter<D> sf(sim.m.f);
-    compute_forces<D>(m, sf);
+    compute_forces<D>(m, sf, true, shape != Shape::fused_one_at_a_time);
   }
   auto f = Kokkos::create_mirror_view(sim.m.f);
   Kokkos::deep_copy(f, sim.m.f);
@@ -80,13 +90,14 @@ Pass force_pass(bool split, bool friction, int calls) {
     for (int k = 0; k < D; ++k) {
       for (int j = 0; j < kPointHistory; ++j) p.hist.push_back(h(q, k, j));
       p.softening += h(q, k, 1) > 0;  // dm0 > 0: initiated
+      p.failed += h(q, k, 0) >= h(q, k, 2) && h(q, k, 1) > 0;  // dmax >= dmf: failed
     }
   return p;
 }
 
 template <int D>
 void same_forces(bool friction) {
-  const Pass fused = force_pass<D>(false, friction, 3), split = force_pass<D>(true, friction, 3);
+  const Pass fused = force_pass<D>(Shape::fused, friction, 3), split = force_pass<D>(Shape::split, friction, 3);
   ASSERT_EQ(fused.f.size(), split.f.size());
   ASSERT_GT(fused.fmax, 0.0);
   EXPECT_GT(fused.softening, 10) << "the scene should soften interfaces";
@@ -102,5 +113,31 @@ void same_forces(bool friction) {
 TEST(ForceKernels, SplitEqualsFused2D) { same_forces<2>(false); }
 TEST(ForceKernels, SplitEqualsFused3D) { same_forces<3>(false); }
 TEST(ForceKernels, SplitEqualsFusedWithFriction3D) { same_forces<3>(true); }
+
+// The fused pass in lanes against one item at a time: every force and history value the same bits,
+// on a scene whose batches mix intact interfaces with initiating, softening and failed ones.
+template <int D>
+void lanes_same_bits(bool friction, bool scatter) {
+  const double amp = 1.2e-5;  // enough for some points to fail within the three calls
+  const Pass a = force_pass<D>(Shape::fused, friction, 3, scatter, amp);
+  const Pass b = force_pass<D>(Shape::fused_one_at_a_time, friction, 3, scatter, amp);
+  ASSERT_EQ(a.f.size(), b.f.size());
+  ASSERT_GT(a.fmax, 0.0);
+  const int points = static_cast<int>(a.hist.size()) / kPointHistory;
+  EXPECT_GT(a.softening, points / 10) << "the scene should soften interfaces";
+  EXPECT_GT(points - a.softening, points / 10) << "some points should stay intact (the lanes' own path)";
+  EXPECT_GT(a.failed, 0) << "some points should fail";
+  int fdiff = 0, hdiff = 0;
+  for (size_t i = 0; i < a.f.size(); ++i) fdiff += a.f[i] != b.f[i];
+  ASSERT_EQ(a.hist.size(), b.hist.size());
+  for (size_t i = 0; i < a.hist.size(); ++i) hdiff += a.hist[i] != b.hist[i];
+  EXPECT_EQ(fdiff, 0) << "of " << a.f.size() << " force components";
+  EXPECT_EQ(hdiff, 0) << "of " << a.hist.size() << " history values";
+}
+
+TEST(ForceKernels, LanesGiveTheSameBits2D) { lanes_same_bits<2>(false, false); }
+TEST(ForceKernels, LanesGiveTheSameBits3D) { lanes_same_bits<3>(false, false); }
+TEST(ForceKernels, LanesGiveTheSameBitsWithFrictionAndScatter3D) { lanes_same_bits<3>(true, true); }
+TEST(ForceKernels, LanesGiveTheSameBitsWithScatter2D) { lanes_same_bits<2>(false, true); }
 
 }  // namespace
