@@ -77,6 +77,24 @@ KOKKOS_FORCEINLINE_FUNCTION Initiation initiation_test(const CohesiveParams& p, 
   return t;
 }
 
+// The equivalent separation of the damage law: the opening (not a closure) and the slip together.
+KOKKOS_FORCEINLINE_FUNCTION double equivalent_separation(double dn, double ds) {
+  const double dnp = kselect(dn > 0.0, dn, 0.0);
+  return kmath::sqrt(dnp * dnp + ds * ds);
+}
+
+// Whether cohesive_update leaves the history h alone at separation (dn, ds) under p, given that
+// the strength has not changed (p.rescale 1): an intact point that does not meet its initiation
+// test, or an initiated one not beyond its largest separation (dm: equivalent_separation(dn, ds)).
+KOKKOS_FORCEINLINE_FUNCTION bool keeps_history(const CohesiveParams& p, const CohesivePoint& h, double dn,
+                                               double ds, double dm) {
+  if (h.dm0 <= 0.0) {
+    const Initiation t = initiation_test(p, dn, ds);
+    return !(t.tensile || t.shear);
+  }
+  return !(dm > h.dmax);
+}
+
 // Updates the history with the separation (dn normal, ds = |tangential|) and returns the
 // tractions: tn (tension positive) and the secant shear stiffness kss so that the shear traction
 // vector is kss * delta_s_vector. Also returns the damage D.
@@ -84,7 +102,7 @@ KOKKOS_FORCEINLINE_FUNCTION void cohesive_update(const CohesiveParams& p, double
                                             CohesivePoint& s, double& tn, double& kss, double& D) {
   // The signs of dn decide selects, not branches (kselect).
   const double dnp = kselect(dn > 0.0, dn, 0.0);
-  const double dm = kmath::sqrt(dnp * dnp + ds * ds);
+  const double dm = equivalent_separation(dn, ds);
   if (s.dm0 > 0.0 && p.rescale != 1.0) {
     // The strength (f_t, c, tan(phi)) has been divided by a factor since the last update
     // (strength reduction): the envelope of an initiated point follows the strength it has now.

@@ -124,23 +124,57 @@ struct InterfaceForces {
   }
 
 #if FDEM_HOST_LANES
-  // Interfaces q0 .. q0 + kLanes - 1 at once. Those that are intact and stay so in this step (not
-  // handed over, every point undamaged and none meeting its initiation test) take the lanes'
-  // forces: the elastic branch of cohesive_update (tn = kn dn, kss = ks, the history unchanged and
-  // not written), the same operations as operator() in the same order, so the same bits. The
-  // others go through operator() in their turn, so that the scatter keeps the interfaces' order.
+  // Whether interface q can take the lanes' path in this step, as far as its history tells (batch:
+  // its separations and damage decide the rest): not handed over, and each point either intact
+  // (dm0 <= 0) or initiated with no strength change (rescale 1) and no residual friction to step.
+  // h: its points' histories.
+  KOKKOS_INLINE_FUNCTION bool lane_ready(const int q, const CohesiveParams& p, CohesivePoint (&h)[D]) const {
+    if (in.icontact(q)) return false;
+    bool ok = true;
+    for (int k = 0; k < D; ++k) {
+      h[k] = load_point(in.ihist, q, k);
+      if (h[k].dm0 > 0.0)
+        ok = ok && p.rescale == 1.0 && !(Fric && p.tanphir >= 0.0);
+      else
+        ok = ok && h[k].dm0 <= 0.0;  // (a NaN takes the scalar code)
+    }
+    return ok;
+  }
+
+  // The damage D of point k of the lanes' interfaces (cohesive_damage, its quotient in the lanes).
+  static HostLanes lane_damage(const CohesivePoint (&h)[kLanes][D], int k) {
+    using L = HostLanes;
+    const L dmax = L::gather([&](int w) { return h[w][k].dmax; });
+    const L dm0 = L::gather([&](int w) { return h[w][k].dm0; });
+    const L dmf = L::gather([&](int w) { return h[w][k].dmf; });
+    const L part = dmf * (dmax - dm0) / (dmax * (dmf - dm0));
+    return L::gather([&](int w) {
+      const CohesivePoint& s = h[w][k];
+      return s.dm0 <= 0.0 || s.dmax <= s.dm0 ? 0.0 : (s.dmax >= s.dmf ? 1.0 : part[w]);
+    });
+  }
+
+  // Interfaces q0 .. q0 + kLanes - 1 at once. Those whose every point keeps its history in this
+  // step take the lanes' forces: an intact point that does not meet its initiation test, or an
+  // initiated one below its largest separation (unloading or reloading: its damage D stays), with
+  // cohesive_update's tractions tn = (dn > 0 ? 1 - D : 1) kn dn and kss = (1 - D) ks; the same
+  // operations as operator() in the same order, so the same bits, and no history written. The
+  // others (initiating, damage growing, failed, handed over, residual friction) go through
+  // operator() in their turn, so that the scatter keeps the interfaces' order.
   template <class Acc>
   void batch(const int q0, Acc& acc) const {
     using L = HostLanes;
-    bool fast[kLanes];
+    bool fast[kLanes], any = false;
     CohesiveParams pw[kLanes];
-    bool any = false;
+    CohesivePoint h[kLanes][D];
     for (int w = 0; w < kLanes; ++w) {
-      const int q = q0 + w;
-      fast[w] = !in.icontact(q);
-      for (int k = 0; k < D; ++k) fast[w] = fast[w] && load_point(in.ihist, q, k).dm0 <= 0.0;
+      pw[w] = PerIface ? in.params(q0 + w) : in.coh;
+      fast[w] = lane_ready(q0 + w, pw[w], h[w]);
       any = any || fast[w];
-      pw[w] = PerIface ? in.params(q) : in.coh;
+    }
+    if (!any) {
+      for (int w = 0; w < kLanes; ++w) (*this)(q0 + w, acc);
+      return;
     }
     const L kn = L::gather([&](int w) { return pw[w].kn; });
     const L ks = L::gather([&](int w) { return pw[w].ks; });
@@ -151,10 +185,6 @@ struct InterfaceForces {
         xa[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, k), i); });
         xb[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, D + k), i); });
       }
-    if (!any) {
-      for (int w = 0; w < kLanes; ++w) (*this)(q0 + w, acc);
-      return;
-    }
     L n[D], ap_cur, g[D], fa[D][D], fb[D][D];
     interface_frame<D, L>(xa, xb, L(1.0), n, ap_cur);
     for (int i = 0; i < D; ++i) g[i] = 0.0;
@@ -163,12 +193,14 @@ struct InterfaceForces {
       for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
       point_separation<D, L>(d, n, dn, ds, ds2);
       const L dsl = lane_sqrt(ds2);
-      for (int w = 0; w < kLanes; ++w)
-        if (fast[w]) {
-          const Initiation t = initiation_test(pw[w], dn[w], dsl[w]);
-          fast[w] = !(t.tensile || t.shear);
-        }
-      point_forces<D, L>(d, n, ap, kn * dn, ks, dn, ds, fa[k], fb[k], g);
+      const L dnp = L::gather([&](int w) { return kselect(dn[w] > 0.0, dn[w], 0.0); });
+      const L dmq = lane_sqrt(dnp * dnp + dsl * dsl);  // equivalent_separation
+      const L dmg = lane_damage(h, k);
+      for (int w = 0; w < kLanes; ++w)  // (failed: the scalar code sees whether it has come apart)
+        if (fast[w]) fast[w] = dmg[w] < 1.0 && keeps_history(pw[w], h[w][k], dn[w], dsl[w], dmq[w]);
+      const L gl = 1.0 - dmg;
+      const L sel = L::gather([&](int w) { return kselect(dn[w] > 0.0, gl[w], 1.0); });
+      point_forces<D, L>(d, n, ap, sel * kn * dn, gl * ks, dn, ds, fa[k], fb[k], g);
     }
     L e[D - 1][D], dm[D][D];
     mid_edges<D, L>(xa, xb, e);
