@@ -129,10 +129,10 @@ struct InterfaceForces {
   // (dm0 <= 0) or initiated with no strength change (rescale 1) and no residual friction to step.
   // h: its points' histories.
   KOKKOS_INLINE_FUNCTION bool lane_ready(const int q, const CohesiveParams& p, CohesivePoint (&h)[D]) const {
+    for (int k = 0; k < D; ++k) h[k] = load_point(in.ihist, q, k);
     if (in.icontact(q)) return false;
     bool ok = true;
     for (int k = 0; k < D; ++k) {
-      h[k] = load_point(in.ihist, q, k);
       if (h[k].dm0 > 0.0)
         ok = ok && p.rescale == 1.0 && !(Fric && p.tanphir >= 0.0);
       else
@@ -152,6 +152,34 @@ struct InterfaceForces {
       const CohesivePoint& s = h[w][k];
       return s.dm0 <= 0.0 || s.dmax <= s.dm0 ? 0.0 : (s.dmax >= s.dmf ? 1.0 : part[w]);
     });
+  }
+
+  // The tractions of point k of the lanes' interfaces as cohesive_update gives them while the
+  // history stays, tn = (dn > 0 ? 1 - D : 1) kn dn and kss = (1 - D) ks, and whether each lane's
+  // point keeps its history (fast; ds: |the tangential separation|). Where no lane's point k has
+  // initiated (D = 0), tn = kn dn and kss = ks: the same bits, without the damage's quotient.
+  static void lane_tractions(const CohesiveParams (&pw)[kLanes], const CohesivePoint (&h)[kLanes][D], const int k,
+                             const HostLanes& kn, const HostLanes& ks, const HostLanes& dn, const HostLanes& ds,
+                             bool (&fast)[kLanes], HostLanes& tn, HostLanes& kss) {
+    using L = HostLanes;
+    bool intact = true;
+    for (int w = 0; w < kLanes; ++w) intact = intact && !(fast[w] && h[w][k].dm0 > 0.0);
+    if (intact) {
+      for (int w = 0; w < kLanes; ++w)
+        if (fast[w]) fast[w] = keeps_history(pw[w], h[w][k], dn[w], ds[w], 0.0);
+      tn = kn * dn;
+      kss = ks;
+      return;
+    }
+    const L dnp = L::gather([&](int w) { return kselect(dn[w] > 0.0, dn[w], 0.0); });
+    const L dm = lane_sqrt(dnp * dnp + ds * ds);  // equivalent_separation
+    const L dmg = lane_damage(h, k);
+    for (int w = 0; w < kLanes; ++w)  // (failed: the scalar code sees whether it has come apart)
+      if (fast[w]) fast[w] = dmg[w] < 1.0 && keeps_history(pw[w], h[w][k], dn[w], ds[w], dm[w]);
+    const L gl = 1.0 - dmg;
+    const L sel = L::gather([&](int w) { return kselect(dn[w] > 0.0, gl[w], 1.0); });
+    tn = sel * kn * dn;
+    kss = gl * ks;
   }
 
   // Interfaces q0 .. q0 + kLanes - 1 at once. Those whose every point keeps its history in this
@@ -192,15 +220,9 @@ struct InterfaceForces {
       L d[D], dn, ds[D], ds2;
       for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
       point_separation<D, L>(d, n, dn, ds, ds2);
-      const L dsl = lane_sqrt(ds2);
-      const L dnp = L::gather([&](int w) { return kselect(dn[w] > 0.0, dn[w], 0.0); });
-      const L dmq = lane_sqrt(dnp * dnp + dsl * dsl);  // equivalent_separation
-      const L dmg = lane_damage(h, k);
-      for (int w = 0; w < kLanes; ++w)  // (failed: the scalar code sees whether it has come apart)
-        if (fast[w]) fast[w] = dmg[w] < 1.0 && keeps_history(pw[w], h[w][k], dn[w], dsl[w], dmq[w]);
-      const L gl = 1.0 - dmg;
-      const L sel = L::gather([&](int w) { return kselect(dn[w] > 0.0, gl[w], 1.0); });
-      point_forces<D, L>(d, n, ap, sel * kn * dn, gl * ks, dn, ds, fa[k], fb[k], g);
+      L tn, kss;
+      lane_tractions(pw, h, k, kn, ks, dn, lane_sqrt(ds2), fast, tn, kss);
+      point_forces<D, L>(d, n, ap, tn, kss, dn, ds, fa[k], fb[k], g);
     }
     L e[D - 1][D], dm[D][D];
     mid_edges<D, L>(xa, xb, e);
