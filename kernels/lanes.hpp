@@ -72,8 +72,6 @@ struct Lanes {
     return r;
   }
   Lanes& operator+=(const Lanes& b) { return *this = *this + b; }
-  Lanes& operator-=(const Lanes& b) { return *this = *this - b; }
-  Lanes& operator*=(const Lanes& b) { return *this = *this * b; }
   friend Lanes sqrt(const Lanes& a) {
     Lanes r;
 #if defined(__SSE2__)
