@@ -123,12 +123,13 @@ NodeGrid node_grid(const Boxes& b, const std::vector<double>& X, int D, int nn, 
 // The query: for each element, the nodes of the cells its box widened by `reach` covers; an
 // element joins the zone of each other part that owns one of them within reach of the box.
 std::vector<std::vector<int>> query_zones(const Boxes& b, const NodeGrid& g, const std::vector<double>& X,
-                                          const std::vector<int>& elem_part, int parts, double reach) {
+                                          const std::vector<int>& elem_part, int parts, double reach, int only) {
   const int D = g.dim, ne = static_cast<int>(elem_part.size());
   std::vector<std::vector<int>> zone(parts);
   std::vector<int> stamp(parts, -1);
   const double r2 = reach * reach;
   for (int e = 0; e < ne; ++e) {
+    if (only >= 0 && elem_part[e] == only) continue;
     const double* l = &b.lo[static_cast<size_t>(e) * D];
     const double* h = &b.hi[static_cast<size_t>(e) * D];
     long c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0};
@@ -145,7 +146,7 @@ std::vector<std::vector<int>> query_zones(const Boxes& b, const NodeGrid& g, con
           if (j0 == j1 || (!g.mixed[id] && (g.owner[j0] == elem_part[e] || stamp[g.owner[j0]] == e))) continue;
           for (int j = j0; j < j1; ++j) {
             const int p = g.owner[j];
-            if (p == elem_part[e] || stamp[p] == e) continue;
+            if (p == elem_part[e] || stamp[p] == e || (only >= 0 && p != only)) continue;
             const int n = g.nodes.items[j];
             double d2 = 0;
             for (int k = 0; k < D; ++k) {
@@ -163,12 +164,13 @@ std::vector<std::vector<int>> query_zones(const Boxes& b, const NodeGrid& g, con
   return zone;
 }
 
-// For each part, the elements of the other parts that come within `reach` of one of its own nodes
-// (the distance from the node to the element's bounding box, at the positions X), each list
-// ascending: the bounding boxes, the node grid, the query.
+// For each part (only >= 0: that part only, the others' lists empty), the elements of the other
+// parts that come within `reach` of one of its own nodes (the distance from the node to the
+// element's bounding box, at the positions X), each list ascending: the bounding boxes, the node
+// grid, the query.
 std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::vector<double>& X,
                                             const std::vector<int>& elem_part, const std::vector<int>& owner,
-                                            int parts, double reach) {
+                                            int parts, double reach, int only) {
   const int D = whole.dim, nn = whole.num_nodes(), ne = whole.num_elems();
   if (ne == 0 || nn == 0) return std::vector<std::vector<int>>(parts);
   const Boxes b = bounding_boxes(whole, X);
@@ -182,7 +184,7 @@ std::vector<std::vector<int>> contact_zones(const HostMesh& whole, const std::ve
   for (size_t id = 0; id + 1 < g.nodes.start.size(); ++id)
     for (int j = g.nodes.start[id] + 1; j < g.nodes.start[id + 1] && !g.mixed[id]; ++j)
       g.mixed[id] = g.owner[j] != g.owner[j - 1];
-  return query_zones(b, g, X, elem_part, parts, reach);
+  return query_zones(b, g, X, elem_part, parts, reach, only);
 }
 
 // Who owns what: each node's part (that of the first element holding it; orphan nodes: part 0) and
@@ -215,7 +217,7 @@ struct PartItems {
 class Decomposer {
  public:
   Decomposer(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach,
-             const std::vector<double>* at);
+             const std::vector<double>* at, int only = -1);
   std::vector<SubMesh> run();
   SubMesh part(int p);
   PartLists lists(int q);
@@ -240,6 +242,7 @@ class Decomposer {
   const int parts_;
   const double reach_;
   const std::vector<double>* at_;
+  const int only_;  // >= 0: only this part is built (its zone only; no pieces or smallest size)
   const int D_, npe_, nn_, ne_, ni_;
   const bool zoned_;
   Owners own_;
@@ -254,12 +257,13 @@ class Decomposer {
 };
 
 Decomposer::Decomposer(const HostMesh& whole, const std::vector<int>& elem_part, int parts,
-                       double contact_reach, const std::vector<double>* at)
+                       double contact_reach, const std::vector<double>* at, int only)
     : w_(whole),
       elem_part_(elem_part),
       parts_(parts),
       reach_(contact_reach),
       at_(at),
+      only_(only),
       D_(whole.dim),
       npe_(whole.dim + 1),
       nn_(whole.num_nodes()),
@@ -322,7 +326,7 @@ void Decomposer::find_owners() {
 // the element of each, the connected pieces and the smallest element size.
 void Decomposer::find_contact() {
   WholeContact& c = contact_;
-  c.zones = contact_zones(w_, at_ ? *at_ : w_.X, elem_part_, own_.owner, parts_, reach_);
+  c.zones = contact_zones(w_, at_ ? *at_ : w_.X, elem_part_, own_.owner, parts_, reach_, only_);
   c.outer = boundary_faces(w_);
   c.outer_elem.assign(c.outer.size() / std::max(D_, 1), -1);  // the element of each outer face
   for (size_t f = 0; f < c.outer_elem.size(); ++f) {
@@ -335,6 +339,7 @@ void Decomposer::find_contact() {
       if (found == D_) c.outer_elem[f] = e;
     }
   }
+  if (only_ >= 0) return;  // (the caller's: local_part's WholeFacts)
   c.pieces = count_bodies(w_);
   c.min_size = mesh_quality(w_).min_size;
 }
@@ -347,6 +352,9 @@ std::vector<SubMesh> Decomposer::run() {
 }
 
 SubMesh Decomposer::part(int p) {
+  if (only_ >= 0 && p != only_)
+    throw InputError("decompose: part " + std::to_string(p) + " asked of a builder of part " + std::to_string(only_) +
+                     " only");
   SubMesh s;
   s.part = p;
   s.parts = parts_;
@@ -608,8 +616,8 @@ struct PartBuilder::Impl {
 };
 
 PartBuilder::PartBuilder(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach,
-                         const std::vector<double>* at)
-    : impl_(new Impl{Decomposer(whole, elem_part, parts, contact_reach, at)}) {}
+                         const std::vector<double>* at, int only)
+    : impl_(new Impl{Decomposer(whole, elem_part, parts, contact_reach, at, only)}) {}
 
 PartBuilder::~PartBuilder() = default;
 

@@ -81,7 +81,10 @@ std::vector<SubMesh> decompose(const HostMesh& whole, const std::vector<int>& el
 // order) with the lists of what it receives (SubMesh::neighbours and recv: the parts it receives
 // from; send empty); what each part sends is known once every part is built: lists(p), which
 // complete_lists adds. The same parts as decompose(), which is built on it. The mesh, the part ids
-// and the positions `at` must outlive the builder.
+// and the positions `at` must outlive the builder. only >= 0: a builder of that part alone (its
+// contact zone alone is searched; the mesh's pieces and smallest element size are left unset for
+// the caller to fill: local_part.hpp); its lists() are not the part's (the send lists then come
+// from the other parts' requests: lists_from_requests).
 struct PartLists {
   std::vector<int> neighbours;             // sorted: the parts it receives from or sends to
   std::vector<std::vector<int>> send;      // per neighbour (SubMesh::send)
@@ -89,7 +92,7 @@ struct PartLists {
 class PartBuilder {
  public:
   PartBuilder(const HostMesh& whole, const std::vector<int>& elem_part, int parts, double contact_reach = 0,
-              const std::vector<double>* at = nullptr);
+              const std::vector<double>* at = nullptr, int only = -1);
   ~PartBuilder();
   PartBuilder(const PartBuilder&) = delete;
   PartBuilder& operator=(const PartBuilder&) = delete;
