@@ -4,7 +4,8 @@ each term of a run over processes (the set-up, a step, the exchange, a fragment 
 checkpoint, a cut of the parts anew) from what was measured per process at 962 688 tetrahedra on
 this machine, extrapolated to N tetrahedra on P processes (64 GPUs, 64 CPU nodes) with the
 assumptions written below, beside today's code path (the set-up and the cut through process 0)
-and the local set-up of docs/parallel.md (designed, not built).
+and the local set-up of docs/parallel.md (its core, local_part, built and measured; not yet in
+`fdem run`).
 
     perf/scale_model.py [--inputs FILE] [--runs PLAIN CHECKPOINT CUT] [--json OUT]
 
@@ -48,6 +49,10 @@ MEASURED = {
     "state_bytes_per_tet": 930,     # the whole state a cut gathers on process 0
     "views_bytes_per_tet": 1642,    # the device's Views per tetrahedron (one thread), intact
     "peak_bytes_per_own_tet": 2535,  # each process's peak resident memory (1.22 GB for 481 344)
+    # local_part of part 0 (perf/bench_local_part, 2026-12-07, the machine loaded: wall about twice
+    # a quiet core's): its neighbourhood refined with its interfaces and the part cut, per own
+    # tetrahedron
+    "local_part_s_per_own_tet": 2.96 / 481344,
 }
 
 # Assumptions (none measured here): the machines of the target.
@@ -101,7 +106,7 @@ def model(m, total, procs, refine):
     n = m["tetrahedra"]
     serial_per_tet = sum(v for k, v in ph.items() if k != "gmsh_coarse") / n
     coarse = total / 8 ** refine  # the coarse mesh Gmsh makes, refined `refine` times
-    local_per_tet = (ph["refinement"] + ph["interface_insertion"]) / n  # what each process would do
+    local_per_tet = m["local_part_s_per_own_tet"]  # what each process does (measured, local_part)
     # each process's own set-up after its part arrives (the model, contact, outputs): the set-up's
     # wall time less process 0's serial phases, per own tetrahedron
     own_per_tet = max(0.0, m["setup_s"] - sum(ph.values())) / (n / m["processes"])
@@ -135,10 +140,11 @@ def model(m, total, procs, refine):
                  f"tetrahedron on process 0, then each part's own set-up ({1e6 * own_per_tet:.1f} us per own "
                  f"tetrahedron); process 0's memory {p0_mem / 1e9:.0f} GB ({fits})"))
     setup_local = coarse * GMSH_S_PER_TET + per * (local_per_tet + own_per_tet)
-    rows.append(("set-up, local (designed, not built)", fmt_time(setup_local), fmt_time(setup_local),
-                 fmt_time(setup_local),
-                 f"the coarse mesh on process 0, then each process refines and inserts its own "
-                 f"({1e6 * local_per_tet:.2f} us per tetrahedron, host code on one thread) and sets its part up"))
+    rows.append(("set-up, local (local_part built; not yet in fdem run)", fmt_time(setup_local),
+                 fmt_time(setup_local), fmt_time(setup_local),
+                 f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
+                 f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one loaded "
+                 f"thread) and sets its part up"))
     views = per * m["views_bytes_per_tet"]
     rows.append(("memory per process (intact)", f"{views / 1e9:.0f} GB of {GPU['memory'] / 1e9:.0f}",
                  f"{views / 1e9:.0f} GB of {CPU['memory'] / 1e9:.0f}",
