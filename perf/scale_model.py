@@ -4,8 +4,8 @@ each term of a run over processes (the set-up, a step, the exchange, a fragment 
 checkpoint, a cut of the parts anew) from what was measured per process at 962 688 tetrahedra on
 this machine, extrapolated to N tetrahedra on P processes (64 GPUs, 64 CPU nodes) with the
 assumptions written below, beside today's code path (the set-up and the cut through process 0)
-and the local set-up of docs/parallel.md (its core, local_part, built and measured; not yet in
-`fdem run`).
+and the local set-up of docs/parallel.md (fdem run's for refined cases, with the whole mesh still
+gathered on process 0; and without that gather).
 
     perf/scale_model.py [--inputs FILE] [--runs PLAIN CHECKPOINT CUT] [--json OUT]
 
@@ -49,10 +49,13 @@ MEASURED = {
     "state_bytes_per_tet": 930,     # the whole state a cut gathers on process 0
     "views_bytes_per_tet": 1642,    # the device's Views per tetrahedron (one thread), intact
     "peak_bytes_per_own_tet": 2535,  # each process's peak resident memory (1.22 GB for 481 344)
-    # local_part of part 0 (perf/bench_local_part, 2026-12-07, the machine loaded: wall about twice
+    # local_part of part 0 (perf/bench_local_part.cpp, 2026-12-07, the machine loaded: wall about twice
     # a quiet core's): its neighbourhood refined with its interfaces and the part cut, per own
     # tetrahedron
     "local_part_s_per_own_tet": 2.96 / 481344,
+    # process 0 gathering the whole mesh from the parts after a local set-up (the same day, fdem run
+    # on 2 processes: summary.json `whole_mesh_gathered`, 2.1 and 2.2 s), per tetrahedron
+    "gather_s_per_tet": 2.1 / 962688,
 }
 
 # Assumptions (none measured here): the machines of the target.
@@ -140,11 +143,15 @@ def model(m, total, procs, refine):
                  f"tetrahedron on process 0, then each part's own set-up ({1e6 * own_per_tet:.1f} us per own "
                  f"tetrahedron); process 0's memory {p0_mem / 1e9:.0f} GB ({fits})"))
     setup_local = coarse * GMSH_S_PER_TET + per * (local_per_tet + own_per_tet)
-    rows.append(("set-up, local (local_part built; not yet in fdem run)", fmt_time(setup_local),
-                 fmt_time(setup_local), fmt_time(setup_local),
+    gather = total * m["gather_s_per_tet"]
+    rows.append(("set-up, local (fdem run today)", fmt_time(setup_local + gather), fmt_time(setup_local + gather),
+                 fmt_time(setup_local + gather),
                  f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
                  f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one loaded "
-                 f"thread) and sets its part up"))
+                 f"thread) and sets its part up; process 0 gathers the whole mesh ({1e6 * m['gather_s_per_tet']:.1f} "
+                 f"us per tetrahedron, {fmt_time(gather)}) for its outputs and the cuts"))
+    rows.append(("set-up, local without the gather (next)", fmt_time(setup_local), fmt_time(setup_local),
+                 fmt_time(setup_local), "the same, with /mesh written by every process's rows and the cut distributed"))
     views = per * m["views_bytes_per_tet"]
     rows.append(("memory per process (intact)", f"{views / 1e9:.0f} GB of {GPU['memory'] / 1e9:.0f}",
                  f"{views / 1e9:.0f} GB of {CPU['memory'] / 1e9:.0f}",

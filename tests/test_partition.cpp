@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <set>
@@ -429,4 +430,38 @@ TEST(Partition, RefinedMeshPartitionedByItsCoarseElements) {
   const int many = ne / 8 / 8 + 1;
   EXPECT_EQ(fdem::partition_elements(mesh, many, fdem::PartitionMethod::Metis, 8),
             fdem::partition_elements(mesh, many, fdem::PartitionMethod::Metis));
+}
+
+// The partition of a refined mesh from its coarse mesh alone (partition_coarse, what every process
+// of a run computes before any refines): balanced, cutting about as few interfaces as METIS on the
+// whole fine graph, the same twice, and refused for more parts than coarse elements.
+TEST(Partition, RefinedMeshPartitionedFromItsCoarseMeshAlone) {
+  const double R = 0.025;
+  fdem::HostMesh coarse = fdem::generate_sphere({0, 0, 0}, R, 0.008);
+  fdem::reorder_for_locality(coarse);
+  const std::vector<fdem::CurvedSurface> s{{{0, 0, 0}, R}};
+  fdem::HostMesh mesh = fdem::refine_mesh(coarse, 1, s);
+  fdem::insert_interfaces(mesh, {true});
+  const fdem::CoarseTopology topo = fdem::coarse_topology(coarse, 1, s);
+  const std::vector<std::int64_t> off = fdem::refined_interface_offsets(coarse, topo);
+  const int parts = 4, ne = mesh.num_elems();
+  std::vector<fdem::PartitionMethod> methods{fdem::PartitionMethod::Rcb};
+  if (fdem::partition_has_metis()) methods.push_back(fdem::PartitionMethod::Metis);
+  for (const fdem::PartitionMethod m : methods) {
+    SCOPED_TRACE(fdem::partition_method_name(m));
+    const std::vector<int> cpart = fdem::partition_coarse(coarse, topo, off, parts, m);
+    ASSERT_EQ(cpart.size(), static_cast<size_t>(coarse.num_elems()));
+    EXPECT_EQ(cpart, fdem::partition_coarse(coarse, topo, off, parts, m));
+    std::vector<int> fine(ne);
+    for (int e = 0; e < ne; ++e) fine[e] = cpart[e / 8];
+    const fdem::PartitionStats g = fdem::partition_stats(mesh, fine, parts);
+    for (long n : g.elements_per_part) EXPECT_GT(n, 0);
+    EXPECT_LT(g.imbalance, 0.05);
+    if (m == fdem::PartitionMethod::Metis) {
+      const fdem::PartitionStats f = fdem::partition_stats(mesh, fdem::partition_elements(mesh, parts, m), parts);
+      EXPECT_LT(g.interfaces_cut, 1.3 * f.interfaces_cut);
+    }
+  }
+  EXPECT_THROW(fdem::partition_coarse(coarse, topo, off, coarse.num_elems() + 1, fdem::PartitionMethod::Rcb),
+               fdem::InputError);
 }

@@ -330,3 +330,31 @@ TEST(Refine, DiscDiameterKeptByJitterAndRefinement) {
 }
 
 }  // namespace
+
+namespace {
+
+// The mean element size of a refined mesh summed per coarse element (refined_mean_size): from the
+// sums of two processes' own coarse elements (each refined alone) added in coarse order, the same
+// bits as from the whole mesh, and the plain mean to round-off.
+TEST(Refine, MeanSizeSummedPerCoarseElementIsTheSameFromParts) {
+  const double R = 0.025;
+  const HostMesh coarse = fdem::generate_sphere({0, 0, 0}, R, 0.009);
+  const std::vector<fdem::CurvedSurface> s{{{0, 0, 0}, R}};
+  const int k = 1, children = 8;
+  const HostMesh whole = fdem::refine_mesh(coarse, k, s);
+  const fdem::CoarseTopology t = fdem::coarse_topology(coarse, k, s);
+  const double mean = fdem::refined_mean_size(whole, children);
+  EXPECT_NEAR(mean, fdem::mesh_quality(whole).mean_size, 1e-12 * mean);
+  std::vector<int> even, odd;
+  for (int e = 0; e < coarse.num_elems(); ++e) (e % 2 ? odd : even).push_back(e);
+  std::vector<double> sums(coarse.num_elems());
+  for (const std::vector<int>* own : {&even, &odd}) {
+    const std::vector<double> part = fdem::coarse_edge_sums(fdem::refine_elements(coarse, t, *own).mesh, children);
+    ASSERT_EQ(part.size(), own->size());
+    for (size_t i = 0; i < own->size(); ++i) sums[(*own)[i]] = part[i];
+  }
+  EXPECT_EQ(fdem::mean_size_from_sums(sums, whole.num_elems(), 3), mean);  // the same bits
+  EXPECT_THROW(fdem::coarse_edge_sums(whole, 7), fdem::InputError);
+}
+
+}  // namespace

@@ -620,6 +620,39 @@ std::vector<std::int64_t> refined_interface_offsets(const HostMesh& m, const Coa
   return off;
 }
 
+std::vector<double> coarse_edge_sums(const HostMesh& fine, int children) {
+  const int d = fine.dim, npe = d + 1, ne = fine.num_elems();
+  if (children < 1 || ne % children != 0)
+    throw InputError("coarse_edge_sums: " + std::to_string(ne) + " elements are not groups of " +
+                     std::to_string(children));
+  std::vector<double> sums(static_cast<std::size_t>(ne / children), 0.0);
+  for (int e = 0; e < ne; ++e) {
+    const int* n = &fine.elems[static_cast<std::size_t>(e) * npe];
+    double& s = sums[static_cast<std::size_t>(e / children)];
+    for (int a = 0; a < npe; ++a)
+      for (int b = a + 1; b < npe; ++b) {
+        double l2 = 0;
+        for (int k = 0; k < d; ++k) {
+          const double dx = fine.X[static_cast<std::size_t>(n[a]) * d + k] - fine.X[static_cast<std::size_t>(n[b]) * d + k];
+          l2 += dx * dx;
+        }
+        s += std::sqrt(l2);
+      }
+  }
+  return sums;
+}
+
+double mean_size_from_sums(const std::vector<double>& sums, long fine_elems, int dim) {
+  double total = 0;
+  for (double s : sums) total += s;
+  const long edges = fine_elems * (dim + 1) * dim / 2;
+  return edges > 0 ? total / static_cast<double>(edges) : 0.0;
+}
+
+double refined_mean_size(const HostMesh& fine, int children) {
+  return mean_size_from_sums(coarse_edge_sums(fine, children), fine.num_elems(), fine.dim);
+}
+
 HostMesh refine_mesh(const HostMesh& coarse, int levels, const std::vector<CurvedSurface>& surfaces) {
   if (levels == 0) return coarse;
   const CoarseTopology t = coarse_topology(coarse, levels, surfaces);

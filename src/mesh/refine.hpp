@@ -76,6 +76,17 @@ RefinedPart refine_elements(const HostMesh& coarse, const CoarseTopology& topo,
 // Size: coarse elements + 1 (the last: the whole mesh's interface count).
 std::vector<std::int64_t> refined_interface_offsets(const HostMesh& coarse, const CoarseTopology& topo);
 
+// A refined mesh's element edges summed per coarse element: `fine` holds groups of `children`
+// consecutive elements (each coarse element's children, in order), and each group's sum runs over
+// its elements' edges in mesh_quality's order. Summed over the coarse elements in their order and
+// divided by the edge count, they give the refined mesh's mean element size (refined_mean_size),
+// which a process holding only its own coarse elements' children computes to the same bits
+// (docs/parallel.md, "The local set-up"): unlike mesh_quality's one running sum over the whole mesh.
+std::vector<double> coarse_edge_sums(const HostMesh& fine, int children);
+double refined_mean_size(const HostMesh& fine, int children);
+// The same from the sums (coarse element order) and the fine element count.
+double mean_size_from_sums(const std::vector<double>& sums, long fine_elems, int dim);
+
 // The whole mesh refined `levels` times; nodes in the order of their global ids (so node i is
 // the coarse mesh's node i for every coarse node), elements in the order of theirs. levels 0:
 // the mesh as it is.

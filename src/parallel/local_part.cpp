@@ -244,7 +244,8 @@ std::vector<int> halo_coarse_elements(const HostMesh& coarse, const CoarseTopolo
 }
 
 LocalRefinement refine_and_insert(const HostMesh& coarse, const CoarseTopology& topo,
-                                  const std::vector<std::int64_t>& iface_offsets, const std::vector<int>& coarse_elems) {
+                                  const std::vector<std::int64_t>& iface_offsets, const std::vector<int>& coarse_elems,
+                                  const LocalHooks& hooks) {
   check_scope(coarse);
   const int D = coarse.dim, npe = D + 1;
   if (!std::is_sorted(coarse_elems.begin(), coarse_elems.end()))
@@ -254,7 +255,9 @@ LocalRefinement refine_and_insert(const HostMesh& coarse, const CoarseTopology& 
   L.mesh = std::move(r.mesh);
   L.elem_gid = std::move(r.elem_gid);
   for (int n = 0; n < L.mesh.num_nodes(); ++n) L.mesh.node_origin[n] = static_cast<int>(r.node_gid[n]);
+  if (hooks.refined) hooks.refined(L.mesh);
   insert_interfaces(L.mesh, std::vector<bool>(L.mesh.region_names.size(), true));
+  if (hooks.inserted) hooks.inserted(L.mesh);
   // the nodes: after insertion each is one element's copy of a corner, the whole mesh's e npe + a
   L.node_gid.assign(L.mesh.num_nodes(), -1);
   for (int e = 0; e < L.mesh.num_elems(); ++e)
@@ -295,7 +298,7 @@ LocalRefinement refine_and_insert(const HostMesh& coarse, const CoarseTopology& 
 
 SubMesh local_part(const HostMesh& coarse, const CoarseTopology& topo, const std::vector<std::int64_t>& iface_offsets,
                    const std::vector<int>& coarse_part, int parts, int p, double contact_reach, const WholeFacts& facts,
-                   LocalPartStats* stats) {
+                   LocalPartStats* stats, const LocalHooks& hooks) {
   check_scope(coarse);
   if (p < 0 || p >= parts)
     throw InputError("local_part: part " + std::to_string(p) + " outside [0, " + std::to_string(parts - 1) + "]");
@@ -308,10 +311,11 @@ SubMesh local_part(const HostMesh& coarse, const CoarseTopology& topo, const std
   auto since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   for (int rings = 1; rings <= 8; ++rings) {
     Clock::time_point t = Clock::now();
-    const std::vector<int> halo = halo_coarse_elements(coarse, topo, coarse_part, p, contact_reach, rings);
+    const std::vector<int> halo =
+        halo_coarse_elements(coarse, topo, coarse_part, p, contact_reach > 0 ? contact_reach + hooks.widen : 0.0, rings);
     st.halo_seconds += since(t);
     t = Clock::now();
-    const LocalRefinement L = refine_and_insert(coarse, topo, iface_offsets, halo);
+    const LocalRefinement L = refine_and_insert(coarse, topo, iface_offsets, halo, hooks);
     st.refine_seconds += since(t);
     t = Clock::now();
     SubMesh s;

@@ -21,6 +21,7 @@
 // exchange come from the other parts' requests (ghost_requests, lists_from_requests), one exchange
 // of global node ids.
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -48,6 +49,17 @@ struct WholeFacts {
 std::vector<int> halo_coarse_elements(const HostMesh& coarse, const CoarseTopology& topo,
                                       const std::vector<int>& coarse_part, int p, double reach, int rings);
 
+// What a run does to a neighbourhood, as prepare_mesh (src/solver/run.hpp) does to the whole mesh:
+// after the refinement (the rotation of mesh.rotation about the whole mesh's centre) and after the
+// insertion (the node sets of regions). Each must give every node it touches the bits the whole
+// mesh's would get.
+// widen: how much farther than the contact reach the halo must look (a rotation: the contact
+// zones are taken at the rotated elements' boxes, the halo at the coarse elements' unrotated ones).
+struct LocalHooks {
+  std::function<void(HostMesh&)> refined, inserted;
+  double widen = 0;
+};
+
 // The refinement of some coarse elements (ascending) with its interfaces inserted, in the whole
 // refined mesh's order (elements by global id; interfaces by side A, then face), and the global id
 // of each node, element and interface: -1 for an interface whose number the neighbourhood cannot
@@ -58,7 +70,8 @@ struct LocalRefinement {
   std::vector<char> closed;  // per coarse element of the whole coarse mesh: it and every facet neighbour held
 };
 LocalRefinement refine_and_insert(const HostMesh& coarse, const CoarseTopology& topo,
-                                  const std::vector<std::int64_t>& iface_offsets, const std::vector<int>& coarse_elems);
+                                  const std::vector<std::int64_t>& iface_offsets, const std::vector<int>& coarse_elems,
+                                  const LocalHooks& hooks = {});
 
 // Part p of the whole refined mesh (refine_mesh then insert_interfaces) for the coarse elements'
 // part ids `coarse_part`, as decompose() would cut it with each fine element in its coarse
@@ -74,7 +87,7 @@ struct LocalPartStats {
 };
 SubMesh local_part(const HostMesh& coarse, const CoarseTopology& topo, const std::vector<std::int64_t>& iface_offsets,
                    const std::vector<int>& coarse_part, int parts, int p, double contact_reach, const WholeFacts& facts,
-                   LocalPartStats* stats = nullptr);
+                   LocalPartStats* stats = nullptr, const LocalHooks& hooks = {});
 
 // The global ids of the ghost nodes part s receives from each of its neighbours (s.neighbours
 // order): what it asks of each owner.

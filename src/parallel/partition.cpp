@@ -13,6 +13,7 @@
 #include "common/error.hpp"
 #include "mesh/mesh.hpp"
 #include "mesh/mesh_internal.hpp"  // face_node, sort_face_key, centroid
+#include "mesh/refine.hpp"
 
 #ifdef FDEM_HAVE_METIS
 #include <metis.h>
@@ -300,6 +301,39 @@ void partition_init(PartitionMethod method) {
 #endif
 }
 
+// The parts of the methods other than METIS: the elements' centroids cut with the weights w
+// (Zoltan's RCB, RIB or HSFC; the baseline RCB), or contiguous index ranges of equal weight (Block).
+static std::vector<int> geometric_parts(const HostMesh& mesh, const std::vector<int>& w, int parts,
+                                        PartitionMethod method) {
+  const int ne = mesh.num_elems();
+  std::vector<int> part(ne, 0);
+  if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
+      method == PartitionMethod::ZoltanHsfc) {
+#ifdef FDEM_HAVE_ZOLTAN
+    const std::vector<double> xyz = centroid_coords(mesh);
+    const char* lb = method == PartitionMethod::ZoltanRcb   ? "RCB"
+                     : method == PartitionMethod::ZoltanRib ? "RIB"
+                                                            : "HSFC";
+    part = zoltan_partition(mesh.dim, xyz, std::vector<float>(w.begin(), w.end()), parts, lb);
+#else
+    throw InputError(std::string("--method ") + partition_method_name(method) + kNoZoltan);
+#endif
+  } else if (method == PartitionMethod::Rcb) {
+    std::vector<int> ids(ne);
+    std::iota(ids.begin(), ids.end(), 0);
+    rcb(centroids(mesh), std::vector<double>(w.begin(), w.end()), mesh.dim, ids.data(), ids.data() + ne, 0, parts,
+        part);
+  } else {  // Block: contiguous index ranges of equal weight
+    const long total = std::accumulate(w.begin(), w.end(), 0L);
+    long acc = 0;
+    for (int e = 0; e < ne; ++e) {
+      part[e] = static_cast<int>(std::min<long>(parts - 1, (2 * acc + w[e]) * parts / (2 * total)));
+      acc += w[e];
+    }
+  }
+  return part;
+}
+
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method, int group) {
   const int ne = mesh.num_elems();
   if (parts < 1 || parts > ne)
@@ -324,32 +358,57 @@ std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMe
       const int a = mesh.iface_elems[2 * static_cast<size_t>(i)];
       if (a >= 0 && a < ne) ++w[a];
     }
-    if (method == PartitionMethod::ZoltanRcb || method == PartitionMethod::ZoltanRib ||
-        method == PartitionMethod::ZoltanHsfc) {
-#ifdef FDEM_HAVE_ZOLTAN
-      const std::vector<double> xyz = centroid_coords(mesh);
-      const char* lb = method == PartitionMethod::ZoltanRcb   ? "RCB"
-                       : method == PartitionMethod::ZoltanRib ? "RIB"
-                                                              : "HSFC";
-      part = zoltan_partition(mesh.dim, xyz, std::vector<float>(w.begin(), w.end()), parts, lb);
-#else
-      throw InputError(std::string("--method ") + partition_method_name(method) + kNoZoltan);
-#endif
-    } else if (method == PartitionMethod::Rcb) {
-      std::vector<int> ids(ne);
-      std::iota(ids.begin(), ids.end(), 0);
-      rcb(centroids(mesh), std::vector<double>(w.begin(), w.end()), mesh.dim, ids.data(), ids.data() + ne, 0,
-          parts, part);
-    } else {  // Block: contiguous index ranges of equal weight
-      const long total = std::accumulate(w.begin(), w.end(), 0L);
-      long acc = 0;
-      for (int e = 0; e < ne; ++e) {
-        part[e] = static_cast<int>(std::min<long>(parts - 1, (2 * acc + w[e]) * parts / (2 * total)));
-        acc += w[e];
-      }
-    }
+    part = geometric_parts(mesh, w, parts, method);
   }
   return part;
+}
+
+std::vector<int> partition_coarse(const HostMesh& coarse, const CoarseTopology& topo,
+                                  const std::vector<std::int64_t>& iface_offsets, int parts, PartitionMethod method) {
+  const int ne = coarse.num_elems(), npe = coarse.dim + 1;
+  if (parts < 1 || parts > ne)
+    throw InputError("--parts " + std::to_string(parts) + " is out of range for a refined mesh: give an integer in [1, " +
+                     std::to_string(ne) + "] (at most the coarse mesh's elements, which mesh.refine splits)");
+  if (iface_offsets.size() != static_cast<size_t>(ne) + 1)
+    throw InputError("partition: " + std::to_string(iface_offsets.size()) + " interface offsets for " +
+                     std::to_string(ne) + " coarse elements");
+  std::vector<int> part(ne, 0);
+  if (parts == 1) return part;
+  const int children = static_cast<int>(refine_factor(coarse.dim, topo.levels) + 0.5);
+  std::vector<int> w(ne);  // the children and the interfaces whose side A they are
+  for (int e = 0; e < ne; ++e) w[e] = children + static_cast<int>(iface_offsets[e + 1] - iface_offsets[e]);
+  if (method != PartitionMethod::Metis) return geometric_parts(coarse, w, parts, method);
+#ifdef FDEM_HAVE_METIS
+  const std::vector<int>& facet_of = coarse.dim == 2 ? topo.elem_edges : topo.elem_faces;
+  const size_t facets = coarse.dim == 2 ? topo.edges.size() : topo.faces.size();
+  std::vector<int> first(facets, -1), second(facets, -1);
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < npe; ++a) {
+      const int F = facet_of[static_cast<size_t>(e) * npe + a];
+      (first[F] < 0 ? first[F] : second[F]) = e;
+    }
+  const int per_facet = coarse.dim == 2 ? topo.m : topo.m * topo.m;  // fine interfaces on a coarse facet
+  ElementGraph q;
+  q.xadj.assign(1, 0);
+  std::vector<idx_t> adjwgt;
+  for (int e = 0; e < ne; ++e) {
+    std::vector<int> nb;
+    for (int a = 0; a < npe; ++a) {
+      const int F = facet_of[static_cast<size_t>(e) * npe + a];
+      const int o = first[F] == e ? second[F] : first[F];
+      if (o >= 0) nb.push_back(o);
+    }
+    std::sort(nb.begin(), nb.end());
+    for (int o : nb) {
+      q.adj.push_back(o);
+      adjwgt.push_back(per_facet);
+    }
+    q.xadj.push_back(static_cast<int>(q.adj.size()));
+  }
+  return metis_kway(q, std::vector<idx_t>(w.begin(), w.end()), parts, std::move(adjwgt));
+#else
+  throw InputError(kNoMetis);
+#endif
 }
 
 }  // namespace fdem

@@ -4,6 +4,7 @@
 // cut runs through interfaces (and, in continuous regions, through faces whose nodes two elements
 // share); its cost is the number of those it cuts: each needs a ghost element and an exchange per
 // step. The work of a part: its elements plus the interfaces whose side A it owns.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,18 @@ ElementGraph element_graph(const HostMesh& mesh);
 // groups' graph (the coarse mesh's), 1/group of the work; ignored where the element count is not a
 // multiple of it or the parts would get fewer than 8 groups each.
 std::vector<int> partition_elements(const HostMesh& mesh, int parts, PartitionMethod method, int group = 1);
+
+// The partition of a mesh refined from `coarse` (src/mesh/refine.hpp) computed from the coarse mesh
+// alone, one part id per coarse element (its children go with it): what a run over processes
+// partitions before any process refines (docs/parallel.md, "The local set-up"), the same on every
+// process and whether the whole fine mesh exists or not. Each coarse element weighs its children
+// and the interfaces whose side A they are (the work model, as element_graph's weights), from
+// iface_offsets (refined_interface_offsets); METIS joins facet neighbours by the fine interfaces
+// between them (neighbours ascending), the other methods cut the coarse centroids with those
+// weights. Throws InputError as partition_elements, with the coarse element count as the limit.
+struct CoarseTopology;
+std::vector<int> partition_coarse(const HostMesh& coarse, const CoarseTopology& topo,
+                                  const std::vector<std::int64_t>& iface_offsets, int parts, PartitionMethod method);
 
 // Recursive coordinate bisection with the given work per element (positive and finite): the cut
 // of the parts during a run (solver/run.cpp), weighted by what each element's step costs. Zoltan's

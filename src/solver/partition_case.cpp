@@ -114,10 +114,12 @@ nlohmann::json partition_case(const std::string& case_path, const std::vector<st
   const std::string out = out_dir.empty() ? "out/" + c.name : out_dir;
   ensure_output_dir(out);
   const OutputLock lock(out);  // the folder is this command's until it ends (as a run's)
-  const HostMesh mesh = prepare_mesh(c);
+  HostMesh coarse;  // (a refined case's: its partition is the coarse mesh's, as a run's)
+  const HostMesh mesh = prepare_mesh(c, &coarse);
   partition_init(method);  // MPI_Init for Zoltan: not part of the partition's time
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<int> part = partition_elements(mesh, parts, method, refined_group(c));
+  const std::vector<int> part = coarse.num_elems() > 0 ? refined_partition(c, coarse, parts, method)
+                                                       : partition_elements(mesh, parts, method);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   PartitionStats s = partition_stats(mesh, part, parts);
   s.seconds = seconds;

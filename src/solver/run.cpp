@@ -25,14 +25,13 @@
 #include "parallel/partition.hpp"
 #include "solver/homogenise.hpp"
 #include "solver/interface_materials.hpp"
+#include "solver/local_setup.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
 #include "solver/summary.hpp"
 
 namespace fdem {
-
-namespace {
 
 // The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
 std::vector<std::string> region_sets_used(const Case& c) {
@@ -47,25 +46,37 @@ std::vector<std::string> region_sets_used(const Case& c) {
   return out;
 }
 
-}  // namespace
-
-// Mesh of a case, ready for the solver (run.hpp). Each part is a set-up phase
-// (common/setup_times.hpp; Gmsh's own inside "mesh").
-HostMesh prepare_mesh(const Case& c) {
+// A case's mesh as built (Gmsh, a file, a generator); a refined case's coarse mesh checked to fit
+// once refined and renumbered for locality (the fine one is left in the order of its global ids,
+// each coarse element's children together: the order a process that refines only its own coarse
+// elements can compute, docs/parallel.md "Scale").
+HostMesh prepare_coarse(const Case& c) {
   using setup_times::Phase;
   Phase build("mesh");
   HostMesh mesh = build_mesh(c.mesh, c.dim);
   build.stop();
-  // mesh.refine: the coarse mesh's exact count first; the coarse mesh renumbered for locality and
-  // the fine one left in the order of its global ids (each coarse element's children together), the
-  // order a process that refines only its own coarse elements can compute (docs/parallel.md, "Scale")
-  const bool refined = c.mesh.refine > 0;
-  if (refined) {
+  if (c.mesh.refine > 0) {
     Phase refine("refinement");
     check_fits_in_memory(static_cast<double>(mesh.num_elems()) * refine_factor(c.dim, c.mesh.refine), c.dim,
                          "mesh.refine = " + std::to_string(c.mesh.refine) + " (" + std::to_string(mesh.num_elems()) +
                              " coarse elements)");
     reorder_for_locality(mesh);
+  }
+  return mesh;
+}
+
+// Mesh of a case, ready for the solver (run.hpp). Each part is a set-up phase
+// (common/setup_times.hpp; Gmsh's own inside "mesh").
+HostMesh prepare_mesh(const Case& c, HostMesh* coarse) { return finish_mesh(c, prepare_coarse(c), coarse); }
+
+// prepare_mesh after prepare_coarse: the refinement, the transforms, the checks, the renumbering,
+// the interfaces and the region sets.
+HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse) {
+  using setup_times::Phase;
+  const bool refined = c.mesh.refine > 0;
+  if (refined) {
+    Phase refine("refinement");
+    if (coarse) *coarse = mesh;
     mesh = refine_mesh(mesh, c.mesh.refine, curved_surfaces(c.mesh, c.dim));
   }
   if (c.mesh.rotation_deg != 0 || c.mesh.jitter > 0) {
@@ -106,6 +117,19 @@ int refined_group(const Case& c) {
   return c.mesh.refine > 0 ? static_cast<int>(refine_factor(c.dim, c.mesh.refine) + 0.5) : 1;
 }
 
+double mean_element_size(const Case& c, const HostMesh& mesh) {
+  return c.mesh.refine > 0 ? refined_mean_size(mesh, refined_group(c)) : mesh_quality(mesh).mean_size;
+}
+
+std::vector<int> refined_partition(const Case& c, const HostMesh& coarse, int parts, PartitionMethod method) {
+  const CoarseTopology topo = coarse_topology(coarse, c.mesh.refine, curved_surfaces(c.mesh, c.dim));
+  const std::vector<int> cpart = partition_coarse(coarse, topo, refined_interface_offsets(coarse, topo), parts, method);
+  const int group = refined_group(c);
+  std::vector<int> part(cpart.size() * static_cast<size_t>(group));
+  for (size_t e = 0; e < part.size(); ++e) part[e] = cpart[e / group];
+  return part;
+}
+
 namespace {
 
 // The resolved case without the keys that do not change the results: the checkpoint interval,
@@ -117,15 +141,6 @@ std::string case_hash(const Case& c) {
   if (r.contains("mesh") && r["mesh"].is_object() && r["mesh"].contains("file")) r["mesh"]["file"] = "";
   const std::string text = r.dump();
   return hash_hex(text.data(), text.size());
-}
-
-std::string mesh_hash(const HostMesh& mesh) {
-  uint64_t h = fnv1a(mesh.X.data(), mesh.X.size() * sizeof(double));
-  h = fnv1a(mesh.elems.data(), mesh.elems.size() * sizeof(int), h);
-  h = fnv1a(mesh.ifaces.data(), mesh.ifaces.size() * sizeof(int), h);
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
-  return buf;
 }
 
 // A restart file must come from this case (same file, same --set options) and this mesh.
@@ -151,8 +166,39 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 }  // namespace
 
+std::string mesh_hash(const HostMesh& mesh) {
+  uint64_t h = fnv1a(mesh.X.data(), mesh.X.size() * sizeof(double));
+  h = fnv1a(mesh.elems.data(), mesh.elems.size() * sizeof(int), h);
+  h = fnv1a(mesh.ifaces.data(), mesh.ifaces.size() * sizeof(int), h);
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
 // Whether the run is over several processes (RunOptions::comm).
 bool over_processes(const RunOptions& opt) { return opt.comm && opt.comm->size() > 1; }
+
+namespace {
+
+// Process 0 of a refined run over processes: whether the parts are built from the coarse mesh
+// (local_setup_refusal); if so it is checked as prepare_mesh checks the whole mesh (its bodies and
+// warnings go to every process with it) and moved into p. Else the whole set-up follows.
+bool prepare_local(const Case& c, HostMesh& coarse, PreparedRun& p) {
+  if (!local_setup_refusal(c, coarse, p.restarting).empty()) return false;
+  setup_times::Phase checks("mesh_checks");
+  const std::string source = c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh";
+  check_elements(coarse, source);
+  check_case_against_mesh(c, coarse);
+  const BodyCheck bodies = check_bodies(coarse, source);
+  coarse.warnings = bodies.warnings;
+  coarse.bodies = bodies.bodies;
+  for (const auto& w : coarse.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+  p.coarse = std::move(coarse);
+  p.local = true;
+  return true;
+}
+
+}  // namespace
 
 PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions& opt) {
   const bool many = over_processes(opt);
@@ -170,14 +216,25 @@ PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions&
   p.lock = std::make_unique<OutputLock>(p.out);
   refuse_inputs_among_outputs(p.out, {case_path, c.mesh.kind == "file" ? c.mesh.file : ""});
   // The mesh (and a restart's match with it) before the folder is touched: a case whose mesh
-  // cannot be made or would not fit leaves the results of an earlier run where they are.
-  p.mesh = prepare_mesh(c);
+  // cannot be made or would not fit leaves the results of an earlier run where they are. Over
+  // several processes a refined case's parts may be built from its coarse mesh alone
+  // (solver/local_setup.hpp): then only that is made here, and checked.
+  if (many && c.mesh.refine > 0) {
+    HostMesh coarse = prepare_coarse(c);
+    if (prepare_local(c, coarse, p)) {
+      if (!p.restarting) remove_old_outputs(p.out);
+      return p;
+    }
+    p.mesh = finish_mesh(c, std::move(coarse), &p.coarse);
+  } else {
+    p.mesh = prepare_mesh(c, &p.coarse);
+  }
   p.id.mesh_hash = mesh_hash(p.mesh);
   if (p.restarting) check_restart_matches(opt.restart, p.header, c, p.mesh, p.id);
   // A new run's folder holds only its results; a restart continues those there.
   if (!p.restarting) remove_old_outputs(p.out);
   // the case as run, with the derived values the run uses (case.json)
-  resolve_defaults(c, p.mesh);
+  resolve_defaults(c, mean_element_size(c, p.mesh));
   return p;
 }
 
@@ -199,7 +256,7 @@ nlohmann::json run_case(const std::string& case_path, const RunOptions& opt) {
 nlohmann::json check_case(const std::string& case_path, const std::vector<std::string>& overrides, bool moduli) {
   Case c = load_case(case_path, overrides);
   const HostMesh mesh = prepare_mesh(c);
-  resolve_defaults(c, mesh);
+  resolve_defaults(c, mean_element_size(c, mesh));
   nlohmann::json report = {{"case", c.name}, {"dimension", c.dim}, {"mesh", mesh_report(mesh)}};
   if (mesh.num_ifaces() > 0) {
     report["interfaces"] = interface_material_report(c, interface_material_map(c, mesh));

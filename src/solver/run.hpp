@@ -12,6 +12,7 @@ namespace fdem {
 struct Case;
 struct HostMesh;
 class Comm;
+enum class PartitionMethod;
 
 // What the user sets for a run (the command line's options). The state of the run itself (the
 // cuts of the parts anew over several processes: CutHistory, solver/run_state.hpp) is the run's.
@@ -49,11 +50,21 @@ nlohmann::json check_case(const std::string& case_path, const std::vector<std::s
 
 // Mesh of a case, ready for the solver: built or read, checked, renumbered (Morton order of the
 // element centroids; a refined mesh: the coarse mesh's, each coarse element's children together),
-// interfaces inserted. Throws InputError. Also used by `fdem partition`.
-HostMesh prepare_mesh(const Case& c);
+// interfaces inserted. Throws InputError. Also used by `fdem partition`. coarse (a refined case):
+// the coarse mesh as it was refined (renumbered), for what is computed from it alone.
+HostMesh prepare_mesh(const Case& c, HostMesh* coarse = nullptr);
 // The elements of prepare_mesh's mesh come in groups of this many consecutive ones, each a coarse
 // element's children (mesh.refine, src/mesh/refine.hpp; 1: no refinement): a partition keeps
 // them together (partition_elements' group).
 int refined_group(const Case& c);
+// The mean element size a case's defaults derive from (resolve_defaults): mesh_quality's, or for
+// a refined case refined_mean_size (src/mesh/refine.hpp), which the processes of a run that refine
+// only their own coarse elements compute to the same bits.
+double mean_element_size(const Case& c, const HostMesh& mesh);
+// A refined case's partition into `parts` computed from its coarse mesh (partition_coarse,
+// src/parallel/partition.hpp), one part id per fine element (each coarse element's children
+// together): what a run over processes and `fdem partition` use, and what a process that refines
+// only its own coarse elements computes alike.
+std::vector<int> refined_partition(const Case& c, const HostMesh& coarse, int parts, PartitionMethod method);
 
 }  // namespace fdem

@@ -27,6 +27,7 @@
 #include "parallel/partition.hpp"
 #include "solver/homogenise.hpp"
 #include "solver/interface_materials.hpp"
+#include "solver/local_setup.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
 #include "solver/simulation.hpp"
@@ -114,6 +115,7 @@ class ProcessesRun {
   nlohmann::json run();
 
  private:
+  bool local_parts();
   void first_parts();
   std::vector<int> restart_parts(const std::vector<double>& at, PartitionMethod bisection) const;
   void check_every_part_filled(const std::vector<int>& elem_part) const;
@@ -146,9 +148,11 @@ class ProcessesRun {
 };
 
 nlohmann::json ProcessesRun::run() {
-  if (root_) first_parts();
-  // (an error on process 0 above ends every process: the others wait in the sending)
-  send_first_parts();
+  if (!local_parts()) {
+    if (root_) first_parts();
+    // (an error on process 0 above ends every process: the others wait in the sending)
+    send_first_parts();
+  }
   take_restart_cuts();
   for (;;) {
     LoopEnd end = run_part();
@@ -169,6 +173,39 @@ nlohmann::json ProcessesRun::run() {
   }
 }
 
+// Whether the parts are built locally (process 0 decided in prepare_run: PreparedRun::local), and
+// if so every process's part built (local_setup), the defaults resolved, and on process 0 the
+// whole mesh gathered from the parts: the run loop's and the cuts', as first_parts keeps it.
+bool ProcessesRun::local_parts() {
+  std::vector<char> flag(1, prep_.local ? 1 : 0);
+  comm_.broadcast_bytes(flag);
+  if (!flag.at(0)) return false;
+  const PartitionMethod method = partition_has_metis() ? PartitionMethod::Metis
+                                 : partition_has_zoltan() ? PartitionMethod::ZoltanRcb
+                                                          : PartitionMethod::Rcb;
+  LocalSetup ls = local_setup(c_, comm_, prep_.coarse, method, region_sets_used(c_));
+  part_ = std::move(ls.part);
+  mean_size_ = ls.mean_size;
+  prep_.coarse = HostMesh{};
+  if (!root_) {
+    hold_part_only();
+    return true;
+  }
+  prep_.mesh = std::move(ls.whole);
+  prep_.id.mesh_hash = mesh_hash(prep_.mesh);
+  for (std::string& w : unused_material_rules(c_, prep_.mesh)) {  // (as prepare_mesh)
+    std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+    prep_.mesh.warnings.push_back(std::move(w));
+  }
+  write_file_atomic(prep_.out + "/case.json", c_.resolved.dump(2) + "\n");
+  elem_part_at_start_ = std::move(ls.elem_part);
+  if (ls.reach > 0) {  // kept for cutting the parts anew during the run
+    whole_ = std::make_shared<const HostMesh>(std::move(prep_.mesh));
+    whole_reach_ = ls.reach;
+  }
+  return true;
+}
+
 // Process 0: the partition and the builder of the first parts (receive_part builds each as it is
 // sent). With contact each part holds the faces within its
 // contact zone (reach: the search distance, the contact law's penetration depth, ContactSystem::set_law,
@@ -181,8 +218,8 @@ void ProcessesRun::first_parts() {
                      std::to_string(mesh.num_elems()) + " processes (mpirun -n), or with a finer mesh");
   setup_times::Phase phase("decomposition");
   const MeshQuality mq = mesh_quality(mesh);
-  mean_size_ = mq.mean_size;
-  const double reach = contact_wanted(c_, mesh) ? contact_penetration_depth(mq.min_size, mq.mean_size) +
+  mean_size_ = mean_element_size(c_, mesh);  // (what prepare_run's defaults derived from)
+  const double reach = contact_wanted(c_, mesh) ? contact_penetration_depth(mq.min_size, mean_size_) +
                                                       c_.contact.skin + c_.contact.zone
                                                 : 0.0;
   // METIS when the build has it, else coordinate bisection (Zoltan's RCB where the build has
@@ -202,7 +239,8 @@ void ProcessesRun::first_parts() {
   std::vector<int> elem_part =
       resumed && restart.has("processes/contact_recuts") && restart.get_int("processes/contact_recuts") > 0
           ? restart_parts(*at, bisection)
-          : partition_elements(mesh, comm_.size(), method, refined_group(c_));
+          : prep_.coarse.num_elems() > 0 ? refined_partition(c_, prep_.coarse, comm_.size(), method)
+                                         : partition_elements(mesh, comm_.size(), method);
   check_every_part_filled(elem_part);
   elem_part_at_start_ = std::move(elem_part);
   if (reach > 0) {  // kept for cutting the parts anew during the run

@@ -3,6 +3,7 @@
 // (solver/run_processes.cpp) share. Internal to src/solver.
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -26,6 +27,10 @@ struct PreparedRun {
   StateArrays restart;               // its checkpoint
   CheckpointHeader header;
   HostMesh mesh;   // over several processes on process 0 only
+  HostMesh coarse;  // a refined case's coarse mesh (prepare_mesh's), where `mesh` is
+  // over several processes: the parts are built locally from `coarse` (solver/local_setup.hpp;
+  // process 0 decides and has no `mesh` yet, nor the defaults or the mesh's hash)
+  bool local = false;
   RunIdentity id;  // (the mesh's hash on the process that writes)
   // The checkpoint the run goes on from; null: a new run.
   const StateArrays* checkpoint() const { return restarting ? &restart : nullptr; }
@@ -37,6 +42,15 @@ bool over_processes(const RunOptions& opt);
 // The shared set-up (PreparedRun); over several processes every process calls it, and process 0
 // alone touches the output folder and meshes the case.
 PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions& opt);
+
+// A case's mesh as built, a refined case's coarse mesh renumbered (prepare_mesh's first phase),
+// and the rest of prepare_mesh on it.
+HostMesh prepare_coarse(const Case& c);
+HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse = nullptr);
+// The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
+std::vector<std::string> region_sets_used(const Case& c);
+// The hash of a mesh's coordinates and connectivity a checkpoint's header keeps.
+std::string mesh_hash(const HostMesh& mesh);
 
 // A run over several processes (solver/run_processes.cpp): every process calls it.
 nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt);

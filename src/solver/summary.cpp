@@ -266,7 +266,8 @@ namespace {
 nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
   static const std::vector<std::string> names = {
       "gmsh_meshing", "gmsh_extraction", "gmsh_process", "mesh", "refinement", "mesh_transforms",
-      "mesh_checks", "renumbering", "interface_insertion", "decomposition", "parts_sent", "mesh_kept",
+      "mesh_checks", "renumbering", "interface_insertion", "local_parts", "whole_mesh_gathered", "decomposition",
+      "parts_sent", "mesh_kept",
       "model_elements", "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
   const nlohmann::json st = setup_times::report();
   std::vector<double> mine(names.size() + 4, 0.0);

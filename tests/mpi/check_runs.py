@@ -45,6 +45,10 @@ byte (its parts are cut where the run last cut them), on 2 within the bounds. An
 (tests/mpi/exploding_disc.json: 12 sectors fly apart and turn, so they cross every boundary between
 the parts; cut anew 13 times) keeps the momentum zero to round-off in every row, the mass and the
 counts, on 1-4 processes (check_exploding).
+A refined case's parts are built by each process from the coarse mesh (the disc with contact and
+the 3D impact turned by mesh.rotation, with contact, on 2 and 3 processes): history.csv,
+fragments.csv and snapshots.h5 the same bits as with the whole set-up on process 0
+(FDEM_WHOLE_SETUP=1); a jitter takes the whole set-up (check_local_setup).
 The bar of tests/data/cases (two velocity BCs, no platens) with and without interfaces on 2 and 3
 processes: a checkpoint, the snapshots and a SIGTERM write their empty entries (no platen, no
 interface) and the restart ends with the uninterrupted run's history.csv byte for byte; with an
@@ -681,6 +685,64 @@ def interrupt(fdem, n, case, sets, out, rows=20):
         return None, "the processes did not end within 60 s"
 
 
+def setup_phases(out):
+    with open(os.path.join(out, "summary.json")) as f:
+        return [p["name"] for p in json.load(f)["setup"]["phases"]]
+
+
+def same_mesh_group(a, b):
+    """Whether two snapshots.h5 hold the same /mesh group, bit for bit."""
+    import h5py
+    with h5py.File(os.path.join(a, "snapshots.h5"), "r") as fa, h5py.File(os.path.join(b, "snapshots.h5"), "r") as fb:
+        if set(fa["mesh"].keys()) != set(fb["mesh"].keys()) or dict(fa["mesh"].attrs) != dict(fb["mesh"].attrs):
+            return False
+        return all(fa["mesh"][d][()].tobytes() == fb["mesh"][d][()].tobytes() for d in fa["mesh"])
+
+
+# Refined cases whose parts each process builds from the coarse mesh (src/solver/local_setup.hpp):
+# the disc with contact, and the 3D impact turned by mesh.rotation (its centre found over the
+# processes), with contact, cracking (1500 steps).
+LOCAL_SETUP = {
+    "disc_refined+contact": (CASES["disc"][0],
+                             [x for x in CASES["disc_refined"][1] if x not in COMMON]),
+    "impact3d_refined": ("cases/particle_impact_3d/case.json",
+                         ["parameters.h=0.01", "mesh.refine=1", "time.max_steps=1500", "output.history_rows=3000",
+                          "output.snapshot_count=3", 'mesh.rotation={"angle_deg": 33, "axis": [1, 2, 3]}']),
+}
+
+
+def check_local_setup(fdem):
+    """Each process builds its part from the coarse mesh: the run is the one of the whole set-up
+    (FDEM_WHOLE_SETUP=1: process 0 refines, inserts and cuts the whole mesh) to the bit: history.csv,
+    fragments.csv and snapshots.h5 (frames and /mesh). A jitter (drawn over the whole mesh) takes the
+    whole set-up."""
+    for name, (case, sets) in LOCAL_SETUP.items():
+        for n in (2, 3):
+            out = {}
+            for how, env in (("local", None), ("whole", {"FDEM_WHOLE_SETUP": "1"})):
+                out[how] = os.path.join(WORK, f"{name}-{how}-{n}")
+                r = run(fdem, n, case, sets, out[how], env=env)
+                check(r.returncode == 0, f"{name}, {n} processes, {how} set-up: exit {r.returncode}")
+                if r.returncode != 0:
+                    print(r.stderr[-3000:])
+            if not all(os.path.exists(os.path.join(o, "summary.json")) for o in out.values()):
+                continue
+            check("local_parts" in setup_phases(out["local"]) and "decomposition" not in setup_phases(out["local"])
+                  and "decomposition" in setup_phases(out["whole"]),
+                  f"{name}, {n} processes: the parts built locally (summary.json setup phases), and not with "
+                  "FDEM_WHOLE_SETUP=1")
+            same = all(same_file(os.path.join(out["local"], f), os.path.join(out["whole"], f))
+                       for f in ("history.csv", "fragments.csv"))
+            frames, why = same_frames(out["local"], out["whole"])
+            check(same and frames and same_mesh_group(out["local"], out["whole"]),
+                  f"{name}, {n} processes: history.csv, fragments.csv and snapshots.h5 the same bits with the "
+                  f"whole set-up ({why})")
+    out = os.path.join(WORK, "disc_refined-jitter-2")
+    r = run(fdem, 2, CASES["disc"][0], CASES["disc_refined"][1] + ['mesh.jitter={"amplitude": 0.1}'], out)
+    check(r.returncode == 0 and "decomposition" in setup_phases(out),
+          f"disc_refined with mesh.jitter, 2 processes: the whole set-up (exit {r.returncode})")
+
+
 def check_small_cases(fdem):
     """The bar with and without interfaces on 2 and 3 processes: a checkpoint, the snapshots and a
     SIGTERM lose nothing (the restart ends with the uninterrupted run's history.csv byte for byte);
@@ -1071,8 +1133,12 @@ def main():
     check(at and at[-1] > 0, f"impact2d+contact: contact energy {at[-1] if at else 0:.3g} J at the checkpoint (> 0)")
     check_restarts(fdem, "impact2d+contact", ck, AFTER_TOL["impact2d"])
 
-    # a refined mesh: its checkpoints restart on any count as the directly meshed one's
+    # a refined mesh: its checkpoints restart on any count as the directly meshed one's (the run
+    # that writes them builds its parts locally, a restart with the whole set-up)
     check_restarts(fdem, "disc_refined", ["output.checkpoint_every=7e-5"])
+
+    print("refined cases: the parts built from the coarse mesh against the whole set-up")
+    check_local_setup(fdem)
 
     print("impact3d at 40 m/s: fragments")
     base = None

@@ -1,0 +1,337 @@
+// local_setup (local_setup.hpp) and its phases: the coarse mesh and its partition shared, the
+// whole mesh's sizes from each process's own refinement, the part built, the node sets' sizes and
+// the exchange lists from the processes, the whole mesh gathered on process 0.
+#include "solver/local_setup.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/error.hpp"
+#include "common/setup_times.hpp"
+#include "common/union_find.hpp"
+#include "mesh/refine.hpp"
+#include "parallel/comm.hpp"
+#include "parallel/local_part.hpp"
+#include "solver/contact_system.hpp"
+
+namespace fdem {
+
+namespace {
+
+// What every process knows of the coarse mesh.
+struct Basis {
+  HostMesh coarse;
+  CoarseTopology topo;
+  std::vector<std::int64_t> off;  // refined_interface_offsets
+  std::vector<int> cpart;         // each coarse element's part
+  int children = 1;
+};
+
+std::vector<char> int_bytes(const std::vector<int>& v) {
+  std::vector<char> b(v.size() * sizeof(int));
+  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
+  return b;
+}
+std::vector<int> bytes_ints(const std::vector<char>& b) {
+  std::vector<int> v(b.size() / sizeof(int));
+  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(int));
+  return v;
+}
+
+// 1. Process 0's coarse mesh and its partition to every process; each derives the topology.
+Basis share_coarse(const Case& c, const Comm& comm, const HostMesh& coarse, PartitionMethod method) {
+  Basis b;
+  std::vector<char> bytes;
+  if (comm.rank() == 0) bytes = pack_mesh(coarse);
+  comm.broadcast_bytes(bytes);
+  b.coarse = comm.rank() == 0 ? coarse : unpack_mesh(bytes);
+  b.topo = coarse_topology(b.coarse, c.mesh.refine, curved_surfaces(c.mesh, c.dim));
+  b.off = refined_interface_offsets(b.coarse, b.topo);
+  b.children = static_cast<int>(refine_factor(c.dim, c.mesh.refine) + 0.5);
+  // (process 0 partitions: a partitioner need not give every process the same bits)
+  if (comm.rank() == 0) bytes = int_bytes(partition_coarse(b.coarse, b.topo, b.off, comm.size(), method));
+  comm.broadcast_bytes(bytes);
+  b.cpart = bytes_ints(bytes);
+  std::vector<long> per(comm.size(), 0);
+  for (int p : b.cpart) ++per[p];
+  for (int p = 0; p < comm.size(); ++p)
+    if (per[p] == 0)
+      throw InputError(c.file + ": the partition of the coarse mesh's " + std::to_string(b.cpart.size()) +
+                       " elements leaves process " + std::to_string(p) + " of " + std::to_string(comm.size()) +
+                       " without an element: run it on fewer processes (mpirun -n), or with a finer coarse mesh");
+  return b;
+}
+
+// The connected pieces of the whole refined mesh with interfaces everywhere: its coarse elements
+// joined across their facets (elements that touch at an edge or a vertex only share no fine
+// interface).
+int facet_pieces(const Basis& b) {
+  const int ne = b.coarse.num_elems(), npe = b.coarse.dim + 1;
+  const std::vector<int>& facet_of = b.coarse.dim == 2 ? b.topo.elem_edges : b.topo.elem_faces;
+  std::vector<int> first(b.coarse.dim == 2 ? b.topo.edges.size() : b.topo.faces.size(), -1);
+  UnionFind u(ne);
+  for (int e = 0; e < ne; ++e)
+    for (int a = 0; a < npe; ++a) {
+      int& f = first[facet_of[static_cast<size_t>(e) * npe + a]];
+      if (f < 0) f = e;
+      else u.join(f, e);
+    }
+  int pieces = 0;
+  for (int e = 0; e < ne; ++e) pieces += u.find(e) == e;
+  return pieces;
+}
+
+// The rotation of mesh.rotation about the whole refined mesh's centre, which the processes find
+// together (the box of the coarse nodes and of every process's new nodes), as a transform of a
+// neighbourhood; none without a rotation. widen: each coarse element's largest box diagonal (the
+// contact zones' boxes are the rotated elements').
+LocalHooks rotation_hooks(const Case& c, const Comm& comm, const Basis& b, const HostMesh& own) {
+  LocalHooks h;
+  if (c.mesh.rotation_deg == 0) return h;
+  MeshSpec spec = c.mesh;
+  spec.jitter = 0;
+  const int D = c.dim;
+  if (!spec.has_rotation_center) {
+    std::vector<double> v(6, std::numeric_limits<double>::infinity());  // lo, -hi
+    for (const HostMesh* m : {&b.coarse, &own})
+      for (int n = 0; n < m->num_nodes(); ++n)
+        for (int k = 0; k < D; ++k) {
+          v[k] = std::min(v[k], m->X[static_cast<size_t>(n) * D + k]);
+          v[3 + k] = std::min(v[3 + k], -m->X[static_cast<size_t>(n) * D + k]);
+        }
+    comm.min(v.data(), 6);
+    for (int k = 0; k < 3; ++k) spec.rotation_center[k] = k < D ? 0.5 * (v[k] + -v[3 + k]) : 0.0;
+    spec.has_rotation_center = true;
+  }
+  h.refined = [spec](HostMesh& m) { transform_mesh(m, spec); };
+  const int npe = D + 1;
+  for (int e = 0; e < b.coarse.num_elems(); ++e) {
+    double d2 = 0;
+    for (int k = 0; k < D; ++k) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (int a = 0; a < npe; ++a) {
+        const double x = b.coarse.X[static_cast<size_t>(b.coarse.elems[static_cast<size_t>(e) * npe + a]) * D + k];
+        lo = std::min(lo, x);
+        hi = std::max(hi, x);
+      }
+      d2 += (hi - lo) * (hi - lo);
+    }
+    h.widen = std::max(h.widen, std::sqrt(d2));
+  }
+  return h;
+}
+
+// 2. The whole refined mesh's mean and smallest element size (mean_element_size, mesh_quality's
+// min_size) from every process's refinement of its own coarse elements: each sends its coarse
+// elements' edge sums to process 0, which adds them in coarse order.
+void whole_sizes(const Comm& comm, const Basis& b, const HostMesh& own, const std::vector<int>& own_elems,
+                 double& mean, double& min) {
+  const std::vector<double> sums = coarse_edge_sums(own, b.children);
+  std::vector<double> mine, all;
+  for (size_t i = 0; i < own_elems.size(); ++i) {
+    mine.push_back(own_elems[i]);
+    mine.push_back(sums[i]);
+  }
+  comm.gather(mine, all);
+  mean = std::numeric_limits<double>::infinity();
+  if (comm.rank() == 0) {
+    std::vector<double> S(b.coarse.num_elems(), 0.0);
+    for (size_t j = 0; j + 1 < all.size(); j += 2) S[static_cast<size_t>(all[j])] = all[j + 1];
+    mean = mean_size_from_sums(S, static_cast<long>(b.coarse.num_elems()) * b.children, own.dim);
+  }
+  comm.min(&mean, 1);  // process 0's
+  min = mesh_quality(own).min_size;
+  comm.min(&min, 1);
+}
+
+// The whole node sets' sizes: every node is one process's own.
+void whole_set_sizes(const Comm& comm, SubMesh& s) {
+  std::vector<double> n;
+  for (const auto& [name, set] : s.mesh.node_sets) n.push_back(static_cast<double>(set.size()));
+  comm.sum(n.data(), static_cast<int>(n.size()));
+  size_t k = 0;
+  for (const auto& [name, set] : s.mesh.node_sets) s.mesh.whole_set_size[name] = static_cast<long>(n[k++]);
+}
+
+// 3. The send lists: every process's requests (the global ids of the ghosts it receives from each
+// neighbour) through process 0 to their owners (lists_from_requests).
+void complete_from_requests(const Comm& comm, SubMesh& s) {
+  const std::vector<std::vector<std::int64_t>> req = ghost_requests(s);
+  std::vector<double> mine{static_cast<double>(comm.rank()), static_cast<double>(s.neighbours.size())}, all;
+  for (size_t k = 0; k < req.size(); ++k) {
+    mine.push_back(s.neighbours[k]);
+    mine.push_back(static_cast<double>(req[k].size()));
+    for (std::int64_t g : req[k]) mine.push_back(static_cast<double>(g));
+  }
+  mine.insert(mine.begin(), static_cast<double>(mine.size()));  // (the blocks' lengths: one pass)
+  comm.gather(mine, all);
+  std::vector<std::vector<double>> inbox(comm.rank() == 0 ? comm.size() : 0);  // (from, count, ids)...
+  for (size_t j = 0; j < all.size();) {
+    const size_t len = static_cast<size_t>(all[j]);
+    const double from = all[j + 1];
+    size_t at = j + 3;
+    for (int k = 0; k < static_cast<int>(all[j + 2]); ++k) {
+      const int to = static_cast<int>(all[at]);
+      const size_t n = static_cast<size_t>(all[at + 1]);
+      std::vector<double>& box = inbox[to];
+      box.push_back(from);
+      box.push_back(static_cast<double>(n));
+      box.insert(box.end(), all.begin() + at + 2, all.begin() + at + 2 + n);
+      at += 2 + n;
+    }
+    j += 1 + len;
+  }
+  std::vector<std::vector<char>> out(inbox.size());
+  for (size_t r = 0; r < inbox.size(); ++r) {
+    out[r].resize(inbox[r].size() * sizeof(double));
+    if (!inbox[r].empty()) std::memcpy(out[r].data(), inbox[r].data(), out[r].size());
+  }
+  std::vector<char> got;
+  comm.scatter_bytes(out, got);
+  std::vector<double> box(got.size() / sizeof(double));
+  if (!box.empty()) std::memcpy(box.data(), got.data(), box.size() * sizeof(double));
+  std::vector<int> from;  // (ascending: process 0 gathered the requests in process order)
+  std::vector<std::vector<std::int64_t>> asked;
+  for (size_t j = 0; j < box.size();) {
+    from.push_back(static_cast<int>(box[j]));
+    const size_t n = static_cast<size_t>(box[j + 1]);
+    asked.emplace_back();
+    for (size_t i = 0; i < n; ++i) asked.back().push_back(static_cast<std::int64_t>(box[j + 2 + i]));
+    j += 2 + n;
+  }
+  complete_lists(s, lists_from_requests(s, from, asked));
+}
+
+// 4. The whole mesh on process 0, from every process's own rows (nodes: position and origin;
+// elements: nodes and region; counted interfaces: nodes and elements; the node sets' own nodes), in
+// the whole mesh's numbering: prepare_mesh's mesh, as the whole set-up makes it (its face sets
+// aside, which nothing after the insertion reads). Empty on the others.
+HostMesh gather_whole(const Comm& comm, const SubMesh& s) {
+  const HostMesh& m = s.mesh;
+  const int D = m.dim, npe = D + 1;
+  std::vector<double> node(static_cast<size_t>(m.owned_nodes) * (D + 1));
+  for (int n = 0; n < m.owned_nodes; ++n) {
+    for (int k = 0; k < D; ++k) node[static_cast<size_t>(n) * (D + 1) + k] = m.X[static_cast<size_t>(n) * D + k];
+    node[static_cast<size_t>(n) * (D + 1) + D] = m.node_origin[n];
+  }
+  std::vector<double> elem(static_cast<size_t>(m.owned_elems) * (npe + 1));
+  for (int e = 0; e < m.owned_elems; ++e) {
+    for (int a = 0; a < npe; ++a)
+      elem[static_cast<size_t>(e) * (npe + 1) + a] = s.node_global[m.elems[static_cast<size_t>(e) * npe + a]];
+    elem[static_cast<size_t>(e) * (npe + 1) + npe] = m.elem_region[e];
+  }
+  const int iw = 2 * D + 2;
+  std::vector<double> ifc(static_cast<size_t>(m.owned_ifaces) * iw);
+  for (int q = 0; q < m.owned_ifaces; ++q) {
+    for (int a = 0; a < 2 * D; ++a)
+      ifc[static_cast<size_t>(q) * iw + a] = s.node_global[m.ifaces[static_cast<size_t>(q) * 2 * D + a]];
+    for (int side = 0; side < 2; ++side)
+      ifc[static_cast<size_t>(q) * iw + 2 * D + side] = s.elem_global[m.iface_elems[2 * static_cast<size_t>(q) + side]];
+  }
+  const std::vector<double> nodes = gather_rows(comm, node.data(), m.owned_nodes, D + 1, s.node_global, s.whole_nodes);
+  const std::vector<double> elems = gather_rows(comm, elem.data(), m.owned_elems, npe + 1, s.elem_global, s.whole_elems);
+  const std::vector<double> ifaces = gather_rows(comm, ifc.data(), m.owned_ifaces, iw, s.iface_global, s.whole_ifaces);
+  HostMesh w;
+  std::map<std::string, std::vector<int>> sets;
+  for (const auto& [name, set] : m.node_sets) {  // (the same names on every process)
+    std::vector<double> mine, all;
+    for (int n : set) mine.push_back(s.node_global[n]);
+    comm.gather(mine, all);
+    std::vector<int>& g = sets[name];
+    for (double v : all) g.push_back(static_cast<int>(v));
+    std::sort(g.begin(), g.end());
+  }
+  if (comm.rank() != 0) return w;
+  w.dim = D;
+  w.region_names = m.region_names;
+  w.warnings = m.warnings;
+  w.bodies = m.bodies;
+  w.node_sets = std::move(sets);
+  w.X.resize(static_cast<size_t>(s.whole_nodes) * D);
+  w.node_origin.resize(static_cast<size_t>(s.whole_nodes));
+  for (long n = 0; n < s.whole_nodes; ++n) {
+    for (int k = 0; k < D; ++k) w.X[static_cast<size_t>(n) * D + k] = nodes[static_cast<size_t>(n) * (D + 1) + k];
+    w.node_origin[n] = static_cast<int>(nodes[static_cast<size_t>(n) * (D + 1) + D]);
+  }
+  for (long e = 0; e < s.whole_elems; ++e) {
+    for (int a = 0; a < npe; ++a) w.elems.push_back(static_cast<int>(elems[static_cast<size_t>(e) * (npe + 1) + a]));
+    w.elem_region.push_back(static_cast<int>(elems[static_cast<size_t>(e) * (npe + 1) + npe]));
+  }
+  for (long q = 0; q < s.whole_ifaces; ++q) {
+    for (int a = 0; a < 2 * D; ++a) w.ifaces.push_back(static_cast<int>(ifaces[static_cast<size_t>(q) * iw + a]));
+    for (int side = 0; side < 2; ++side)
+      w.iface_elems.push_back(static_cast<int>(ifaces[static_cast<size_t>(q) * iw + 2 * D + side]));
+  }
+  return w;
+}
+
+}  // namespace
+
+std::string local_setup_refusal(const Case& c, const HostMesh& coarse, bool restarting) {
+  const char* w = std::getenv("FDEM_WHOLE_SETUP");
+  if (w && std::string(w) == "1") return "FDEM_WHOLE_SETUP=1";
+  if (c.mesh.refine < 1) return "the mesh is not refined (mesh.refine)";
+  if (restarting) return "a restart";
+  if (c.mesh.jitter > 0) return "mesh.jitter (drawn over the whole mesh)";
+  if (!c.surface_iface_material.empty()) return "interfaces cut along named surfaces (fracture.surfaces)";
+  for (const std::string& r : coarse.region_names)
+    if (std::find(c.fracturable_regions.begin(), c.fracturable_regions.end(), r) == c.fracturable_regions.end())
+      return "region '" + r + "' is not fracturable";
+  return "";
+}
+
+LocalSetup local_setup(Case& c, const Comm& comm, const HostMesh& coarse, PartitionMethod method,
+                       const std::vector<std::string>& region_sets) {
+  setup_times::Phase phase("local_parts");
+  const Basis b = share_coarse(c, comm, coarse, method);
+  std::vector<int> own_elems;
+  for (int e = 0; e < b.coarse.num_elems(); ++e)
+    if (b.cpart[e] == comm.rank()) own_elems.push_back(e);
+  LocalSetup out;
+  double min_size = 0;
+  LocalHooks hooks;
+  {
+    RefinedPart own = refine_elements(b.coarse, b.topo, own_elems);
+    hooks = rotation_hooks(c, comm, b, own.mesh);
+    if (hooks.refined) hooks.refined(own.mesh);
+    // (prepare_mesh checks the whole refined mesh's elements: here each process its own)
+    check_elements(own.mesh, c.mesh.kind == "file" ? c.mesh.file : c.file + ": mesh");
+    whole_sizes(comm, b, own.mesh, own_elems, out.mean_size, min_size);
+  }
+  resolve_defaults(c, out.mean_size);
+  out.reach = c.contact.enabled != 0
+                  ? contact_penetration_depth(min_size, out.mean_size) + c.contact.skin + c.contact.zone
+                  : 0.0;
+  hooks.inserted = [&region_sets](HostMesh& m) { add_region_node_sets(m, region_sets); };
+  WholeFacts facts;
+  facts.elems = static_cast<long>(b.coarse.num_elems()) * b.children;
+  facts.nodes = facts.elems * (c.dim + 1);
+  facts.ifaces = static_cast<long>(b.off.back());
+  facts.pieces = facet_pieces(b);
+  facts.min_size = min_size;
+  facts.warnings = b.coarse.warnings;
+  facts.bodies = b.coarse.bodies;
+  out.part = local_part(b.coarse, b.topo, b.off, b.cpart, comm.size(), comm.rank(), out.reach, facts, nullptr, hooks);
+  whole_set_sizes(comm, out.part);
+  complete_from_requests(comm, out.part);
+  phase.stop();
+  {
+    setup_times::Phase gather("whole_mesh_gathered");
+    out.whole = gather_whole(comm, out.part);
+  }
+  if (comm.rank() == 0) {
+    out.elem_part.resize(static_cast<size_t>(facts.elems));
+    for (size_t e = 0; e < out.elem_part.size(); ++e) out.elem_part[e] = b.cpart[e / b.children];
+  }
+  return out;
+}
+
+}  // namespace fdem
