@@ -28,7 +28,8 @@ struct RunOptions {
   const volatile std::sig_atomic_t* interrupt = nullptr;
   // The processes of a run under mpirun (an MPI build's main sets it; src/parallel/comm.hpp).
   // With more than one, process 0 meshes the case, partitions it (METIS, else coordinate
-  // bisection) and sends each process its part (src/parallel/decompose.hpp); each runs its part
+  // bisection) and sends each process its part (src/parallel/decompose.hpp), or for a refined case
+  // each process builds its own from the coarse mesh (src/solver/local_setup.hpp); each runs its part
   // and process 0 writes the outputs (docs/parallel.md: what such a run does not do yet is refused
   // with the key to change).
   std::shared_ptr<const Comm> comm;

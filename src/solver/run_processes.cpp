@@ -1,5 +1,6 @@
 // A run over several processes (docs/parallel.md): process 0 meshes the case, partitions and
-// decomposes it and sends each process its part; every process runs its part; with contact the
+// decomposes it and sends each process its part (a refined case: each process builds its own from
+// the coarse mesh, solver/local_setup.hpp); every process runs its part; with contact the
 // parts are cut anew when a run loop asks for it, and the next run loop goes on from the whole
 // state on the new parts (ProcessesRun and its phases). One concern, so one file.
 #include "solver/run.hpp"
