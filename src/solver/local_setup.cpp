@@ -213,63 +213,75 @@ void complete_from_requests(const Comm& comm, SubMesh& s) {
 // 4. The whole mesh on process 0, from every process's own rows (nodes: position and origin;
 // elements: nodes and region; counted interfaces: nodes and elements; the node sets' own nodes), in
 // the whole mesh's numbering: prepare_mesh's mesh, as the whole set-up makes it (its face sets
-// aside, which nothing after the insertion reads). Empty on the others.
+// aside, which nothing after the insertion reads). Empty on the others. One kind of row at a time,
+// each taken into the mesh and let go of before the next (process 0's peak memory).
+//
+// Rows of `width` values per own item (fill(i, row)) gathered into the whole mesh's order; on
+// process 0 take(j, row) for every whole item j.
+template <class Fill, class Take>
+void gather_each(const Comm& comm, size_t own, size_t width, const std::vector<int>& ids, long whole, Fill&& fill,
+                 Take&& take) {
+  std::vector<double> mine(own * width);
+  for (size_t i = 0; i < own; ++i) fill(i, &mine[i * width]);
+  const std::vector<double> all = gather_rows(comm, mine.data(), own, width, ids, static_cast<size_t>(whole));
+  mine = std::vector<double>{};
+  if (comm.rank() == 0)
+    for (long j = 0; j < whole; ++j) take(j, &all[static_cast<size_t>(j) * width]);
+}
+
 HostMesh gather_whole(const Comm& comm, const SubMesh& s) {
   const HostMesh& m = s.mesh;
-  const int D = m.dim, npe = D + 1;
-  std::vector<double> node(static_cast<size_t>(m.owned_nodes) * (D + 1));
-  for (int n = 0; n < m.owned_nodes; ++n) {
-    for (int k = 0; k < D; ++k) node[static_cast<size_t>(n) * (D + 1) + k] = m.X[static_cast<size_t>(n) * D + k];
-    node[static_cast<size_t>(n) * (D + 1) + D] = m.node_origin[n];
-  }
-  std::vector<double> elem(static_cast<size_t>(m.owned_elems) * (npe + 1));
-  for (int e = 0; e < m.owned_elems; ++e) {
-    for (int a = 0; a < npe; ++a)
-      elem[static_cast<size_t>(e) * (npe + 1) + a] = s.node_global[m.elems[static_cast<size_t>(e) * npe + a]];
-    elem[static_cast<size_t>(e) * (npe + 1) + npe] = m.elem_region[e];
-  }
-  const int iw = 2 * D + 2;
-  std::vector<double> ifc(static_cast<size_t>(m.owned_ifaces) * iw);
-  for (int q = 0; q < m.owned_ifaces; ++q) {
-    for (int a = 0; a < 2 * D; ++a)
-      ifc[static_cast<size_t>(q) * iw + a] = s.node_global[m.ifaces[static_cast<size_t>(q) * 2 * D + a]];
-    for (int side = 0; side < 2; ++side)
-      ifc[static_cast<size_t>(q) * iw + 2 * D + side] = s.elem_global[m.iface_elems[2 * static_cast<size_t>(q) + side]];
-  }
-  const std::vector<double> nodes = gather_rows(comm, node.data(), m.owned_nodes, D + 1, s.node_global, s.whole_nodes);
-  const std::vector<double> elems = gather_rows(comm, elem.data(), m.owned_elems, npe + 1, s.elem_global, s.whole_elems);
-  const std::vector<double> ifaces = gather_rows(comm, ifc.data(), m.owned_ifaces, iw, s.iface_global, s.whole_ifaces);
+  const int D = m.dim, npe = D + 1, iw = 2 * D + 2;
+  const bool root = comm.rank() == 0;
   HostMesh w;
-  std::map<std::string, std::vector<int>> sets;
+  if (root) {
+    w.X.resize(static_cast<size_t>(s.whole_nodes) * D);
+    w.node_origin.resize(static_cast<size_t>(s.whole_nodes));
+  }
+  gather_each(
+      comm, m.owned_nodes, D + 1, s.node_global, s.whole_nodes,
+      [&](size_t n, double* r) {
+        for (int k = 0; k < D; ++k) r[k] = m.X[n * D + k];
+        r[D] = m.node_origin[n];
+      },
+      [&](long n, const double* r) {
+        for (int k = 0; k < D; ++k) w.X[static_cast<size_t>(n) * D + k] = r[k];
+        w.node_origin[n] = static_cast<int>(r[D]);
+      });
+  gather_each(
+      comm, m.owned_elems, npe + 1, s.elem_global, s.whole_elems,
+      [&](size_t e, double* r) {
+        for (int a = 0; a < npe; ++a) r[a] = s.node_global[m.elems[e * npe + a]];
+        r[npe] = m.elem_region[e];
+      },
+      [&](long, const double* r) {
+        for (int a = 0; a < npe; ++a) w.elems.push_back(static_cast<int>(r[a]));
+        w.elem_region.push_back(static_cast<int>(r[npe]));
+      });
+  gather_each(
+      comm, m.owned_ifaces, iw, s.iface_global, s.whole_ifaces,
+      [&](size_t q, double* r) {
+        for (int a = 0; a < 2 * D; ++a) r[a] = s.node_global[m.ifaces[q * 2 * D + a]];
+        for (int side = 0; side < 2; ++side) r[2 * D + side] = s.elem_global[m.iface_elems[2 * q + side]];
+      },
+      [&](long, const double* r) {
+        for (int a = 0; a < 2 * D; ++a) w.ifaces.push_back(static_cast<int>(r[a]));
+        for (int side = 0; side < 2; ++side) w.iface_elems.push_back(static_cast<int>(r[2 * D + side]));
+      });
   for (const auto& [name, set] : m.node_sets) {  // (the same names on every process)
     std::vector<double> mine, all;
     for (int n : set) mine.push_back(s.node_global[n]);
     comm.gather(mine, all);
-    std::vector<int>& g = sets[name];
+    if (!root) continue;
+    std::vector<int>& g = w.node_sets[name];
     for (double v : all) g.push_back(static_cast<int>(v));
     std::sort(g.begin(), g.end());
   }
-  if (comm.rank() != 0) return w;
+  if (!root) return HostMesh{};
   w.dim = D;
   w.region_names = m.region_names;
   w.warnings = m.warnings;
   w.bodies = m.bodies;
-  w.node_sets = std::move(sets);
-  w.X.resize(static_cast<size_t>(s.whole_nodes) * D);
-  w.node_origin.resize(static_cast<size_t>(s.whole_nodes));
-  for (long n = 0; n < s.whole_nodes; ++n) {
-    for (int k = 0; k < D; ++k) w.X[static_cast<size_t>(n) * D + k] = nodes[static_cast<size_t>(n) * (D + 1) + k];
-    w.node_origin[n] = static_cast<int>(nodes[static_cast<size_t>(n) * (D + 1) + D]);
-  }
-  for (long e = 0; e < s.whole_elems; ++e) {
-    for (int a = 0; a < npe; ++a) w.elems.push_back(static_cast<int>(elems[static_cast<size_t>(e) * (npe + 1) + a]));
-    w.elem_region.push_back(static_cast<int>(elems[static_cast<size_t>(e) * (npe + 1) + npe]));
-  }
-  for (long q = 0; q < s.whole_ifaces; ++q) {
-    for (int a = 0; a < 2 * D; ++a) w.ifaces.push_back(static_cast<int>(ifaces[static_cast<size_t>(q) * iw + a]));
-    for (int side = 0; side < 2; ++side)
-      w.iface_elems.push_back(static_cast<int>(ifaces[static_cast<size_t>(q) * iw + 2 * D + side]));
-  }
   return w;
 }
 
