@@ -49,13 +49,12 @@ MEASURED = {
     "state_bytes_per_tet": 930,     # the whole state a cut gathers on process 0
     "views_bytes_per_tet": 1642,    # the device's Views per tetrahedron (one thread), intact
     "peak_bytes_per_own_tet": 2535,  # each process's peak resident memory (1.22 GB for 481 344)
-    # local_part of part 0 (perf/bench_local_part.cpp, 2026-12-07, the machine loaded: wall about twice
-    # a quiet core's): its neighbourhood refined with its interfaces and the part cut, per own
-    # tetrahedron
-    "local_part_s_per_own_tet": 2.96 / 481344,
-    # process 0 gathering the whole mesh from the parts after a local set-up (the same day, fdem run
-    # on 2 processes: summary.json `whole_mesh_gathered`, 2.1 and 2.2 s), per tetrahedron
-    "gather_s_per_tet": 2.1 / 962688,
+    # local_part of part 0 (perf/bench_local_part.cpp, 2026-12-07, the machine quiet): its
+    # neighbourhood refined with its interfaces and the part cut, per own tetrahedron
+    "local_part_s_per_own_tet": 2.20 / 481344,
+    # process 0 gathering the whole mesh from the parts after a local set-up (the same evening, fdem
+    # run on 2 processes, quiet: summary.json `whole_mesh_gathered`, 0.79 and 0.85 s), per tetrahedron
+    "gather_s_per_tet": 0.82 / 962688,
 }
 
 # Assumptions (none measured here): the machines of the target.
@@ -147,7 +146,7 @@ def model(m, total, procs, refine):
     rows.append(("set-up, local (fdem run today)", fmt_time(setup_local + gather), fmt_time(setup_local + gather),
                  fmt_time(setup_local + gather),
                  f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
-                 f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one loaded "
+                 f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one quiet "
                  f"thread) and sets its part up; process 0 gathers the whole mesh ({1e6 * m['gather_s_per_tet']:.1f} "
                  f"us per tetrahedron, {fmt_time(gather)}) for its outputs and the cuts"))
     rows.append(("set-up, local without the gather (next)", fmt_time(setup_local), fmt_time(setup_local),
