@@ -271,6 +271,21 @@ CoarseTopology coarse_topology(const HostMesh& m, int levels, const std::vector<
                            el[e * npe + face_node(3, f, 2)]);
         },
         t.faces, t.elem_faces, &uses);
+  {  // the element across each facet
+    const std::vector<int>& facet_of = d == 2 ? t.elem_edges : t.elem_faces;
+    std::vector<int> first(d == 2 ? t.edges.size() : t.faces.size(), -1);
+    t.elem_neighbours.assign(static_cast<std::size_t>(ne) * npe, -1);
+    for (int e = 0; e < ne; ++e)
+      for (int f = 0; f < npe; ++f) {
+        int& at = first[facet_of[static_cast<std::size_t>(e) * npe + f]];
+        if (at < 0) {
+          at = e * npe + f;
+        } else {
+          t.elem_neighbours[static_cast<std::size_t>(e) * npe + f] = at / npe;
+          t.elem_neighbours[static_cast<std::size_t>(at)] = e;
+        }
+      }
+  }
   const std::vector<Facet> facets = collect_facets(m, t, uses);
   t.surfaces = surfaces;
   assign_surfaces(m, t, facets, surfaces);
@@ -598,23 +613,11 @@ std::vector<std::int64_t> refined_interface_offsets(const HostMesh& m, const Coa
   const std::int64_t children = static_cast<std::int64_t>(refine_factor(d, t.levels) + 0.5);
   const std::int64_t per_facet = d == 2 ? t.m : static_cast<std::int64_t>(t.m) * t.m;
   const std::int64_t inside = (npe * children - npe * per_facet) / 2;
-  // the coarse elements at each facet (at most two)
-  const std::vector<int>& facet_of = d == 2 ? t.elem_edges : t.elem_faces;
-  const std::size_t facets = d == 2 ? t.edges.size() : t.faces.size();
-  std::vector<int> first(facets, -1), second(facets, -1);
-  for (int e = 0; e < ne; ++e)
-    for (int f = 0; f < npe; ++f) {
-      const int F = facet_of[static_cast<std::size_t>(e) * npe + f];
-      (first[F] < 0 ? first[F] : second[F]) = e;
-    }
   std::vector<std::int64_t> off(static_cast<std::size_t>(ne) + 1, 0);
   for (int e = 0; e < ne; ++e) {
     std::int64_t n = inside;
-    for (int f = 0; f < npe; ++f) {
-      const int F = facet_of[static_cast<std::size_t>(e) * npe + f];
-      const int other = first[F] == e ? second[F] : first[F];
-      if (other > e) n += per_facet;
-    }
+    for (int f = 0; f < npe; ++f)
+      if (t.elem_neighbours[static_cast<std::size_t>(e) * npe + f] > e) n += per_facet;
     off[e + 1] = off[e] + n;
   }
   return off;

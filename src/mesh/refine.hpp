@@ -40,6 +40,9 @@ struct CoarseTopology {
   std::vector<std::array<int, 3>> faces;  // 3D: sorted triples, in sorted order
   std::vector<int> elem_edges;            // per element 3 (2D) or 6 (3D) edge indices
   std::vector<int> elem_faces;            // 3D: per element 4 face indices (face f opposite vertex f)
+  // Per element dim + 1: the coarse element across each of its facets (elem_edges' order in 2D,
+  // elem_faces' in 3D), -1 on the boundary.
+  std::vector<int> elem_neighbours;
   std::vector<CurvedSurface> surfaces;
   // Per edge / face: the curved surface its new nodes are moved onto (-1: none).
   std::vector<int> edge_surface, face_surface;

@@ -17,28 +17,6 @@ namespace fdem {
 
 namespace {
 
-// The coarse elements at each coarse facet (at most two; -1: none), and each element's facets.
-struct FacetNeighbours {
-  const std::vector<int>* facet_of = nullptr;  // per element dim + 1 facet indices
-  std::vector<int> first, second;
-  int other(int F, int e) const { return first[F] == e ? second[F] : first[F]; }
-};
-
-FacetNeighbours facet_neighbours(const HostMesh& m, const CoarseTopology& t) {
-  FacetNeighbours f;
-  const int npe = m.dim + 1;
-  f.facet_of = m.dim == 2 ? &t.elem_edges : &t.elem_faces;
-  const std::size_t facets = m.dim == 2 ? t.edges.size() : t.faces.size();
-  f.first.assign(facets, -1);
-  f.second.assign(facets, -1);
-  for (int e = 0; e < m.num_elems(); ++e)
-    for (int a = 0; a < npe; ++a) {
-      const int F = (*f.facet_of)[static_cast<std::size_t>(e) * npe + a];
-      (f.first[F] < 0 ? f.first[F] : f.second[F]) = e;
-    }
-  return f;
-}
-
 // How far the refinement may move a new node out of its coarse element: onto a curved surface
 // (CurvedSurface) radially, from a point of a boundary facet at distance d >= the facet's plane's
 // from the centre, so by at most R - d; the largest over the curved facets.
@@ -173,16 +151,14 @@ std::vector<char> within_reach(const HostMesh& m, const std::vector<int>& coarse
 // (local_part): its own and contact zone's fine elements lie in the selection; the sides of their
 // interfaces are their face neighbours, within the first ring; the second completes the first's
 // faces (each fine node is one element's copy, so no other element joins through a node).
-void add_rings(const HostMesh& m, const FacetNeighbours& fn, std::vector<char>& sel, int rings) {
+void add_rings(const HostMesh& m, const CoarseTopology& t, std::vector<char>& sel, int rings) {
   const int npe = m.dim + 1, ne = m.num_elems();
   for (int r = 0; r < rings; ++r) {
     const std::vector<char> before = sel;
     for (int e = 0; e < ne; ++e)
       if (before[e])
-        for (int a = 0; a < npe; ++a) {
-          const int o = fn.other((*fn.facet_of)[static_cast<std::size_t>(e) * npe + a], e);
-          if (o >= 0) sel[o] = 1;
-        }
+        for (int a = 0; a < npe; ++a)
+          if (const int o = t.elem_neighbours[static_cast<std::size_t>(e) * npe + a]; o >= 0) sel[o] = 1;
   }
 }
 
@@ -236,7 +212,7 @@ std::vector<int> halo_coarse_elements(const HostMesh& coarse, const CoarseTopolo
   // (a degenerate curved facet gives no bound: every coarse element then)
   std::vector<char> sel = std::isfinite(margin) ? within_reach(coarse, coarse_part, p, margin, std::max(reach, 0.0))
                                                 : std::vector<char>(coarse.num_elems(), 1);
-  add_rings(coarse, facet_neighbours(coarse, topo), sel, rings);
+  add_rings(coarse, topo, sel, rings);
   std::vector<int> out;
   for (int e = 0; e < coarse.num_elems(); ++e)
     if (sel[e]) out.push_back(e);
@@ -265,14 +241,13 @@ LocalRefinement refine_and_insert(const HostMesh& coarse, const CoarseTopology& 
       L.node_gid[L.mesh.elems[static_cast<std::size_t>(e) * npe + a]] = L.elem_gid[e] * npe + a;
   // the interfaces: those of a coarse element's children (side A) are the whole mesh's when every
   // facet neighbour with a higher id is held (closed implies it), numbered from its offset on
-  const FacetNeighbours fn = facet_neighbours(coarse, topo);
   std::vector<char> held(coarse.num_elems(), 0), complete(coarse.num_elems(), 0);
   L.closed.assign(coarse.num_elems(), 0);
   for (int e : coarse_elems) held[e] = 1;
   for (int e : coarse_elems) {
     bool all = true, higher = true;
     for (int a = 0; a < npe; ++a) {
-      const int o = fn.other((*fn.facet_of)[static_cast<std::size_t>(e) * npe + a], e);
+      const int o = topo.elem_neighbours[static_cast<std::size_t>(e) * npe + a];
       if (o >= 0 && !held[o]) {
         all = false;
         higher = higher && o < e;

@@ -379,25 +379,14 @@ std::vector<int> partition_coarse(const HostMesh& coarse, const CoarseTopology& 
   for (int e = 0; e < ne; ++e) w[e] = children + static_cast<int>(iface_offsets[e + 1] - iface_offsets[e]);
   if (method != PartitionMethod::Metis) return geometric_parts(coarse, w, parts, method);
 #ifdef FDEM_HAVE_METIS
-  const std::vector<int>& facet_of = coarse.dim == 2 ? topo.elem_edges : topo.elem_faces;
-  const size_t facets = coarse.dim == 2 ? topo.edges.size() : topo.faces.size();
-  std::vector<int> first(facets, -1), second(facets, -1);
-  for (int e = 0; e < ne; ++e)
-    for (int a = 0; a < npe; ++a) {
-      const int F = facet_of[static_cast<size_t>(e) * npe + a];
-      (first[F] < 0 ? first[F] : second[F]) = e;
-    }
   const int per_facet = coarse.dim == 2 ? topo.m : topo.m * topo.m;  // fine interfaces on a coarse facet
   ElementGraph q;
   q.xadj.assign(1, 0);
   std::vector<idx_t> adjwgt;
   for (int e = 0; e < ne; ++e) {
     std::vector<int> nb;
-    for (int a = 0; a < npe; ++a) {
-      const int F = facet_of[static_cast<size_t>(e) * npe + a];
-      const int o = first[F] == e ? second[F] : first[F];
-      if (o >= 0) nb.push_back(o);
-    }
+    for (int a = 0; a < npe; ++a)
+      if (const int o = topo.elem_neighbours[static_cast<size_t>(e) * npe + a]; o >= 0) nb.push_back(o);
     std::sort(nb.begin(), nb.end());
     for (int o : nb) {
       q.adj.push_back(o);

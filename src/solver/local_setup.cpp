@@ -75,15 +75,10 @@ Basis share_coarse(const Case& c, const Comm& comm, const HostMesh& coarse, Part
 // interface).
 int facet_pieces(const Basis& b) {
   const int ne = b.coarse.num_elems(), npe = b.coarse.dim + 1;
-  const std::vector<int>& facet_of = b.coarse.dim == 2 ? b.topo.elem_edges : b.topo.elem_faces;
-  std::vector<int> first(b.coarse.dim == 2 ? b.topo.edges.size() : b.topo.faces.size(), -1);
   UnionFind u(ne);
   for (int e = 0; e < ne; ++e)
-    for (int a = 0; a < npe; ++a) {
-      int& f = first[facet_of[static_cast<size_t>(e) * npe + a]];
-      if (f < 0) f = e;
-      else u.join(f, e);
-    }
+    for (int a = 0; a < npe; ++a)
+      if (const int o = b.topo.elem_neighbours[static_cast<size_t>(e) * npe + a]; o >= 0) u.join(e, o);
   int pieces = 0;
   for (int e = 0; e < ne; ++e) pieces += u.find(e) == e;
   return pieces;
