@@ -4,8 +4,8 @@ each term of a run over processes (the set-up, a step, the exchange, a fragment 
 checkpoint, a cut of the parts anew) from what was measured per process at 962 688 tetrahedra on
 this machine, extrapolated to N tetrahedra on P processes (64 GPUs, 64 CPU nodes) with the
 assumptions written below, beside today's code path (the set-up and the cut through process 0)
-and the local set-up of docs/parallel.md (fdem run's for refined cases, with the whole mesh still
-gathered on process 0; and without that gather).
+and the local set-up of docs/parallel.md (fdem run's for refined cases: no process holds the whole
+mesh).
 
     perf/scale_model.py [--inputs FILE] [--runs PLAIN CHECKPOINT CUT] [--json OUT]
 
@@ -52,8 +52,9 @@ MEASURED = {
     # local_part of part 0 (perf/bench_local_part.cpp, 2026-12-07, the machine quiet): its
     # neighbourhood refined with its interfaces and the part cut, per own tetrahedron
     "local_part_s_per_own_tet": 2.20 / 481344,
-    # process 0 gathering the whole mesh from the parts after a local set-up (the same evening, fdem
-    # run on 2 processes, quiet: summary.json `whole_mesh_gathered`, 0.79 and 0.85 s), per tetrahedron
+    # process 0 gathering the whole mesh from the parts (a local set-up's first cut; measured when the
+    # set-up gathered it, 2026-12-06 evening, fdem run on 2 processes, quiet: summary.json
+    # `whole_mesh_gathered`, 0.79 and 0.85 s), per tetrahedron
     "gather_s_per_tet": 0.82 / 962688,
 }
 
@@ -136,21 +137,19 @@ def model(m, total, procs, refine):
     setup_today = coarse * GMSH_S_PER_TET + total * serial_per_tet + per * own_per_tet
     p0_mem = total * (m["p0_mesh_bytes_per_tet"] + m["p0_maps_bytes_per_tet"])
     fits = "fits" if p0_mem < min(GPU["memory"] * 8, CPU["memory"]) else "does not fit a node"
-    rows.append(("set-up today (process 0)", fmt_time(setup_today), fmt_time(setup_today), fmt_time(setup_today),
+    rows.append(("set-up, whole (process 0: a case not refined, FDEM_WHOLE_SETUP=1)", fmt_time(setup_today), fmt_time(setup_today), fmt_time(setup_today),
                  f"Gmsh's coarse mesh ({coarse:.2e} tetrahedra at {1e6 * GMSH_S_PER_TET:.0f} us each), then refinement, "
                  f"insertion, decomposition, the kept mesh and the parts sent at {1e6 * serial_per_tet:.1f} us per "
                  f"tetrahedron on process 0, then each part's own set-up ({1e6 * own_per_tet:.1f} us per own "
                  f"tetrahedron); process 0's memory {p0_mem / 1e9:.0f} GB ({fits})"))
     setup_local = coarse * GMSH_S_PER_TET + per * (local_per_tet + own_per_tet)
     gather = total * m["gather_s_per_tet"]
-    rows.append(("set-up, local (fdem run today)", fmt_time(setup_local + gather), fmt_time(setup_local + gather),
-                 fmt_time(setup_local + gather),
+    rows.append(("set-up, local (fdem run today)", fmt_time(setup_local), fmt_time(setup_local),
+                 fmt_time(setup_local),
                  f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
                  f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one quiet "
-                 f"thread) and sets its part up; process 0 gathers the whole mesh ({1e6 * m['gather_s_per_tet']:.1f} "
-                 f"us per tetrahedron, {fmt_time(gather)}) for its outputs and the cuts"))
-    rows.append(("set-up, local without the gather (next)", fmt_time(setup_local), fmt_time(setup_local),
-                 fmt_time(setup_local), "the same, with /mesh written by every process's rows and the cut distributed"))
+                 f"thread) and sets its part up; no process holds the whole mesh (its hash, report and the "
+                 f"snapshots' /mesh come from every process's rows)"))
     views = per * m["views_bytes_per_tet"]
     rows.append(("memory per process (intact)", f"{views / 1e9:.0f} GB of {GPU['memory'] / 1e9:.0f}",
                  f"{views / 1e9:.0f} GB of {CPU['memory'] / 1e9:.0f}",
@@ -162,8 +161,10 @@ def model(m, total, procs, refine):
     state = total * m["state_bytes_per_tet"]
     rows.append(("a cut today (process 0)", fmt_time(cut_today), fmt_time(cut_today), fmt_time(cut_today),
                  f"the whole state ({state / 1e9:.0f} GB) gathered on process 0 and broadcast "
-                 f"({1e6 * m['cut_s'] / n:.0f} us per tetrahedron measured): a run this size must not cut "
-                 "(a contact zone wide enough for the run) until the distributed cut exists"))
+                 f"({1e6 * m['cut_s'] / n:.0f} us per tetrahedron measured), and at a locally set-up run's first "
+                 f"cut the whole mesh gathered there too ({1e6 * m['gather_s_per_tet']:.1f} us per tetrahedron, "
+                 f"{fmt_time(gather)}): a run this size must not cut (a contact zone wide enough for the run) "
+                 "until the distributed cut exists"))
     return per, rows
 
 

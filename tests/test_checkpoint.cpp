@@ -27,7 +27,10 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "io/case.hpp"
 #include "io/checkpoint.hpp"
+#include "solver/run.hpp"
+#include "solver/run_setup.hpp"
 #include "test_files.hpp"
 
 namespace {
@@ -516,6 +519,26 @@ TEST_F(CheckpointRestart, BadRestartInputExits2NamingTheFile) {
                   "another case or mesh: nodes");
   // a longer run is another case too (max_steps is part of it)
   EXPECT_EQ(run_disc(ck, 1, "--set time.max_steps=900 --restart " + ck + "/checkpoint.h5"), 2);
+  // The header's mesh hash is the sum of the rows' hashes (a run whose mesh no process holds sums
+  // its parts'); a checkpoint written before 2026-12-07 keeps the hash of then (FNV-1a over the
+  // arrays in order) and still restarts; any other hash is another mesh.
+  {
+    const fdem::Case c = fdem::load_case(kDisc, {"mesh.element_size=\"=radius / 6\"", "parameters.rate=0.5",
+                                                 "parameters.closure=1.2e-3", "time.max_steps=800"});
+    const fdem::HostMesh mesh = fdem::prepare_mesh(c);
+    fdem::CheckpointHeader h;
+    const fdem::StateArrays st = fdem::read_checkpoint(ck + "/checkpoint.h5", h);
+    EXPECT_EQ(h.mesh_hash, fdem::mesh_hash(mesh));
+    const std::string old_hash = fdem::mesh_hash_before_2026_12_07(mesh);
+    EXPECT_NE(old_hash, h.mesh_hash);
+    h.mesh_hash = old_hash;
+    fdem::write_checkpoint(out + "/old_hash.h5", h, st);
+    EXPECT_EQ(run_disc(out + "/old", 1, "--set time.max_steps=800 --restart " + out + "/old_hash.h5"), 0)
+        << slurp(out + "/old.log");
+    h.mesh_hash = "0123456789abcdef";
+    fdem::write_checkpoint(out + "/other_hash.h5", h, st);
+    expect_rejected(out + "/other_hash.h5", "--set time.max_steps=800", "the mesh coordinates or connectivity differ");
+  }
   // the same case goes on (the checkpoint interval may change)
   EXPECT_EQ(run_disc(ck, 1, "--set time.max_steps=800 --restart " + ck + "/checkpoint.h5"), 0)
       << slurp(ck + ".log");

@@ -5,6 +5,7 @@
 // exchange lists), with and without a contact zone, in 2D and 3D.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -16,6 +17,8 @@
 #include "mesh/refine.hpp"
 #include "parallel/decompose.hpp"
 #include "parallel/local_part.hpp"
+#include "solver/local_setup.hpp"
+#include "solver/run_setup.hpp"
 
 namespace {
 
@@ -154,6 +157,48 @@ TEST(LocalPart, SpherePartsAreTheWholeRefinedMeshsParts) {
   const std::vector<CurvedSurface> s{{{0, 0, 0}, R}};
   check_local_parts(coarse, 1, s, 2, 0.0);
   check_local_parts(coarse, 1, s, 3, 0.004);
+}
+
+// What a run whose mesh no process holds reports of it comes from the parts' own rows: the
+// checkpoints' mesh hash (the parts' MeshHash sums add up to the whole mesh's) and the mesh
+// report's quality (minima, maxima, the edges' sums and counts).
+TEST(LocalPart, WholeMeshHashAndQualityFromTheParts) {
+  const double R = 0.025;
+  const HostMesh coarse = generate_disc(0, 0, R, 0.004, "body", 0, 0, false);
+  const std::vector<CurvedSurface> surf{{{0, 0, 0}, R}};
+  HostMesh whole = refine_mesh(coarse, 1, surf);
+  insert_interfaces(whole, std::vector<bool>(whole.region_names.size(), true));
+  const std::vector<int> part = slab_parts(whole, 3);
+  PartBuilder builder(whole, part, 3, 0.002);
+  MeshHash sum;
+  const MeshQuality q = mesh_quality(whole);
+  double min_angle = 1e300, max_aspect = 0, min_size = 1e300, edges = 0;
+  long count = 0;
+  for (int p = 0; p < 3; ++p) {
+    const SubMesh s = builder.part(p);
+    ASSERT_LT(s.mesh.owned_elems, s.mesh.num_elems());  // (ghosts, which must not count)
+    sum.sum += own_rows_hash(s).sum;
+    const MeshQuality o = mesh_quality(s.mesh, s.mesh.owned_elems);
+    min_angle = std::min(min_angle, o.min_angle_deg);
+    max_aspect = std::max(max_aspect, o.max_aspect);
+    min_size = std::min(min_size, o.min_size);
+    edges += o.edge_sum;
+    count += o.edge_count;
+  }
+  EXPECT_EQ(sum.hex(), mesh_hash(whole));
+  EXPECT_EQ(min_angle, q.min_angle_deg);
+  EXPECT_EQ(max_aspect, q.max_aspect);
+  EXPECT_EQ(min_size, q.min_size);
+  EXPECT_EQ(count, q.edge_count);
+  EXPECT_NEAR(edges / count, q.mean_size, 1e-12 * q.mean_size);
+  // one coordinate changed in its last bit: another hash
+  HostMesh moved = whole;
+  moved.X[5] = std::nextafter(moved.X[5], 1.0);
+  EXPECT_NE(mesh_hash(moved), mesh_hash(whole));
+  // two elements' rows swapped: another hash (each row is hashed with its index)
+  HostMesh swapped = whole;
+  std::swap_ranges(swapped.elems.begin(), swapped.elems.begin() + 3, swapped.elems.begin() + 3);
+  EXPECT_NE(mesh_hash(swapped), mesh_hash(whole));
 }
 
 // Requests that name a node the part does not own are refused (a damaged exchange), and a part

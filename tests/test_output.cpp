@@ -412,13 +412,22 @@ namespace {
 // order with their whole-mesh indices. One process holding every row in a shuffled order (the
 // default build's HDF5 opens the file with its default driver; the runs over MPI check several
 // processes' parts: tests/mpi/check_runs.py) must give the file and the XDMF SnapshotWriter::write
-// gives for the rows in the whole mesh's order.
+// gives for the rows in the whole mesh's order. The group /mesh likewise (a run whose whole mesh no
+// process holds: SnapshotWriter's shell, then ParallelFrames::write_mesh), with interface fields.
 void own_rows_as_whole(const HostMesh& m, const std::string& dir) {
   const int nn = m.num_nodes(), ne = m.num_elems(), ni = m.num_ifaces(), d = m.dim;
   const FrameData whole = make_frame(m, 1);
   const std::string a = dir + "/whole", b = dir + "/own";
+  const std::vector<std::string> names{"weak", "strong"};
+  std::vector<int> material(ni);
+  std::vector<float> strength(ni);
+  for (int q = 0; q < ni; ++q) {
+    material[q] = q % 2;
+    strength[q] = 1.0f + 0.01f * static_cast<float>(q);
+  }
   {
     fdem::SnapshotWriter w(a, m);
+    w.add_interface_fields(names, material, strength);
     fdem::SnapshotFrame fr;
     fr.time = 2.5e-5;
     fr.step = 30;
@@ -445,23 +454,45 @@ void own_rows_as_whole(const HostMesh& m, const std::string& dir) {
   };
   const std::vector<double> x = rows(whole.x, nid, d), u = rows(whole.u, nid, d), v = rows(whole.v, nid, d),
                             s = rows(whole.stress, eid, 6), dmg = rows(whole.damage, iid, 1);
+  std::vector<int> elems, region, ifaces, mat;
+  std::vector<double> X, factor;
+  for (int e : eid) {
+    for (int k = 0; k <= d; ++k) elems.push_back(m.elems[static_cast<size_t>(e) * (d + 1) + k]);
+    region.push_back(m.elem_region.empty() ? 0 : m.elem_region[e]);
+  }
+  for (int q : iid) {
+    for (int k = 0; k < d; ++k) ifaces.push_back(m.ifaces[static_cast<size_t>(q) * 2 * d + k]);
+    mat.push_back(material[q]);
+    factor.push_back(strength[q]);
+  }
+  for (int n : nid)
+    for (int k = 0; k < d; ++k) X.push_back(m.X[static_cast<size_t>(n) * d + k]);
   {
-    fdem::SnapshotWriter w(b, m);
+    fdem::MeshShell shell;
+    shell.dim = d;
+    shell.nodes = nn;
+    shell.elems = ne;
+    shell.ifaces = ni;
+    shell.region_names = m.region_names;
+    fdem::SnapshotWriter w(b, shell);
+    w.interface_fields_by_rows(names, true);
     w.close_file();
     fdem::ParallelFrames frames(H5Pcreate(H5P_FILE_ACCESS));
+    fdem::MeshPart mp;
+    static_cast<fdem::OwnRows&>(mp) = {d, nn, ne, ni, nid.data(), eid.data(), iid.data(), nid.size(), eid.size(),
+                                       iid.size()};
+    mp.X = X.data();
+    mp.elements = elems.data();
+    mp.region = region.data();
+    mp.interfaces = ifaces.data();
+    mp.with_material = mp.with_strength = true;
+    mp.material = mat.data();
+    mp.strength = factor.data();
+    frames.write_mesh(b, mp);
     fdem::FramePart p;
+    static_cast<fdem::OwnRows&>(p) = mp;
     p.time = 2.5e-5;
     p.step = 30;
-    p.dim = d;
-    p.whole_nodes = nn;
-    p.whole_elems = ne;
-    p.whole_ifaces = ni;
-    p.node_ids = nid.data();
-    p.elem_ids = eid.data();
-    p.iface_ids = iid.data();
-    p.nodes = nid.size();
-    p.elems = eid.size();
-    p.ifaces = iid.size();
     p.x = x.data();
     p.u = u.data();
     p.v = v.data();
@@ -485,6 +516,16 @@ void own_rows_as_whole(const HostMesh& m, const std::string& dir) {
     EXPECT_EQ(da, db) << n;
   }
   EXPECT_EQ(read_i(fa, "/step_00000030/fragment"), read_i(fb, "/step_00000030/fragment"));
+  for (const char* ds : {"/mesh/elements", "/mesh/region", "/mesh/interfaces", "/mesh/interface_material"})
+    EXPECT_EQ(read_i(fa, ds), read_i(fb, ds)) << ds;
+  for (const char* ds : {"/mesh/reference_coordinates", "/mesh/strength_factor"}) {
+    std::vector<hsize_t> da, db;
+    EXPECT_EQ(read_d(fa, ds, &da), read_d(fb, ds, &db)) << ds;
+    EXPECT_EQ(da, db) << ds;
+  }
+  EXPECT_EQ(read_attr<int>(fb, "/mesh", "num_interfaces", H5T_NATIVE_INT), ni);
+  EXPECT_EQ(H5Lexists(fb, "/mesh/interface_material_names", H5P_DEFAULT) > 0, true);
+  EXPECT_EQ(H5Lexists(fb, "/mesh/region_names", H5P_DEFAULT) > 0, !m.region_names.empty());
   EXPECT_EQ(read_attr<double>(fb, "/step_00000030", "time", H5T_NATIVE_DOUBLE), 2.5e-5);
   EXPECT_EQ(read_attr<long long>(fb, "/step_00000030", "step", H5T_NATIVE_LLONG), 30);
   H5Fclose(fa);

@@ -100,9 +100,21 @@ struct SnapshotFrame {
 // group /step_NNNNNNNN per frame; DIR/snapshots.xdmf is a temporal collection with two grids per
 // frame ("bulk": triangles/tetrahedra, "interfaces": polylines/triangles on the current A-side
 // nodes) and is rewritten after every frame, so it is valid whenever the run stops.
+// What /mesh holds before its datasets: a run over processes whose mesh no process holds
+// (src/solver/local_setup.hpp) writes them later, from every process's rows.
+struct MeshShell {
+  int dim = 3;
+  long nodes = 0, elems = 0, ifaces = 0;
+  std::vector<std::string> region_names;
+};
+
 class SnapshotWriter {
  public:
   SnapshotWriter(const std::string& dir, const HostMesh& mesh);
+  // A new file whose /mesh holds the shell's sizes and region names only: its datasets come from
+  // write_mesh (a mesh gathered on this process) or from every process's rows
+  // (ParallelFrames::write_mesh, src/io/snapshot_parallel.hpp, after close_file), before the first frame.
+  explicit SnapshotWriter(const std::string& dir, const MeshShell& shell);
   // Continues DIR/snapshots.h5 (restart): keeps the frames `steps` (with their `times`), deletes
   // any later frame and rewrites the XDMF. When the file cannot be continued (missing, damaged,
   // another mesh, a kept frame missing) it is moved to snapshots.h5.damaged, a new file is
@@ -119,6 +131,11 @@ class SnapshotWriter {
   // "interfaces" grid of every frame. Kept when the file already has them (restart).
   void add_interface_fields(const std::vector<std::string>& names, const std::vector<int>& material,
                             const std::vector<float>& strength);
+  // A shell's datasets from the whole mesh (then as the first constructor's file).
+  void write_mesh(const HostMesh& mesh);
+  // A shell whose interface fields every process writes its rows of (ParallelFrames::write_mesh):
+  // /mesh/interface_material_names here, and the frames' XDMF shows the fields.
+  void interface_fields_by_rows(const std::vector<std::string>& names, bool strength);
   // A run over several processes that writes its frames with ParallelFrames
   // (src/io/snapshot_parallel.hpp): closes this handle (every frame opens the file on every
   // process), then counts each frame written there and rewrites the XDMF.
@@ -139,6 +156,7 @@ class SnapshotWriter {
   std::vector<long> steps_;
   std::vector<char> fragment_;     // per frame: whether it has /fragment
   bool imat_ = false, istrength_ = false;  // /mesh/interface_material, /mesh/strength_factor
+  bool shell_ = false;                     // /mesh without its datasets yet
 };
 
 }  // namespace fdem

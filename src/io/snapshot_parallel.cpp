@@ -86,20 +86,62 @@ ParallelFrames::~ParallelFrames() {
   if (fapl_ >= 0) H5Pclose(static_cast<hid_t>(fapl_));
 }
 
-void ParallelFrames::write(const std::string& dir, const FramePart& f) const {
-  const std::string path = (std::filesystem::path(dir.empty() ? "." : dir) / snapshot::kH5Name).string();
+// The file, opened on every process at the first call (kept open); a collective transfer list.
+long long ParallelFrames::open(const std::string& path) const {
   h5::silence();
   if (file_ < 0) {
     file_ = H5Fopen(path.c_str(), H5F_ACC_RDWR, static_cast<hid_t>(fapl_));
     if (file_ < 0) h5::fail(path, "cannot open it on every process (MPI-IO)");
   }
-  const hid_t file = static_cast<hid_t>(file_);
-  Id dxpl(H5Pcreate(H5P_DATASET_XFER), H5Pclose);
-  if (!dxpl.ok()) h5::fail(path, "cannot create a transfer property list");
+  const hid_t dxpl = H5Pcreate(H5P_DATASET_XFER);
+  if (dxpl < 0) h5::fail(path, "cannot create a transfer property list");
 #ifdef H5_HAVE_PARALLEL
-  if (H5Pset_dxpl_mpio(dxpl.get(), H5FD_MPIO_COLLECTIVE) < 0)
+  if (H5Pset_dxpl_mpio(dxpl, H5FD_MPIO_COLLECTIVE) < 0) {
+    H5Pclose(dxpl);
     h5::fail(path, "cannot ask for collective writes");
+  }
 #endif
+  return dxpl;
+}
+
+void ParallelFrames::write_mesh(const std::string& dir, const MeshPart& m) const {
+  const std::string path = (std::filesystem::path(dir.empty() ? "." : dir) / snapshot::kH5Name).string();
+  Id dxpl(static_cast<hid_t>(open(path)), H5Pclose);
+  const hid_t file = static_cast<hid_t>(file_);
+  Id g(H5Gopen2(file, "/mesh", H5P_DEFAULT), H5Gclose);
+  if (!g.ok()) h5::fail(path, "cannot open group '/mesh'");
+  const Target t{g.get(), dxpl.get(), path};
+  const size_t dim = static_cast<size_t>(m.dim), npe = dim + 1;
+  // (the order SnapshotWriter writes them in)
+  const Rows elems = sorted_rows(m.elem_ids, m.elems);
+  const hsize_t ne = static_cast<hsize_t>(m.whole_elems);
+  const std::vector<int> topo = pack(m.elements, npe, npe, elems);
+  write_rows(t, "elements", H5T_STD_I32LE, H5T_NATIVE_INT, ne, npe, elems, topo.data());
+  const std::vector<int> region = pack(m.region, 1, 1, elems);
+  write_rows(t, "region", H5T_STD_I32LE, H5T_NATIVE_INT, ne, 0, elems, region.data());
+  const Rows ifaces = sorted_rows(m.iface_ids, m.ifaces);
+  const hsize_t ni = static_cast<hsize_t>(m.whole_ifaces);
+  const std::vector<int> itopo = pack(m.interfaces, dim, dim, ifaces);
+  write_rows(t, "interfaces", H5T_STD_I32LE, H5T_NATIVE_INT, ni, dim, ifaces, itopo.data());
+  const Rows nodes = sorted_rows(m.node_ids, m.nodes);
+  const std::vector<double> X3 = pack(m.X, dim, 3, nodes);
+  write_rows(t, "reference_coordinates", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, static_cast<hsize_t>(m.whole_nodes), 3,
+             nodes, X3.data());
+  if (m.with_material) {
+    const std::vector<int> mat = pack(m.material, 1, 1, ifaces);
+    write_rows(t, "interface_material", H5T_STD_I32LE, H5T_NATIVE_INT, ni, 0, ifaces, mat.data());
+  }
+  if (m.with_strength) {
+    const std::vector<double> w = pack(m.strength, 1, 1, ifaces);
+    write_rows(t, "strength_factor", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, ni, 0, ifaces, w.data());
+  }
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush after /mesh");
+}
+
+void ParallelFrames::write(const std::string& dir, const FramePart& f) const {
+  const std::string path = (std::filesystem::path(dir.empty() ? "." : dir) / snapshot::kH5Name).string();
+  Id dxpl(static_cast<hid_t>(open(path)), H5Pclose);
+  const hid_t file = static_cast<hid_t>(file_);
   const std::string gname = "/" + snapshot::step_name(f.step);
   Id g(H5Gcreate2(file, gname.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
   if (!g.ok()) h5::fail(path, "cannot create group '" + gname + "'");

@@ -11,17 +11,20 @@
 
 namespace fdem {
 
-// A process's part of one frame. Rows of the own items: ids[i] is the whole mesh's index of local
-// row i (i < count).
-struct FramePart {
-  double time = 0;
-  long step = 0;
+// The rows a process writes: its own items', ids[i] the whole mesh's index of local row i (i < count).
+struct OwnRows {
   int dim = 3;
   long long whole_nodes = 0, whole_elems = 0, whole_ifaces = 0;
   const int* node_ids = nullptr;
   const int* elem_ids = nullptr;
   const int* iface_ids = nullptr;
   size_t nodes = 0, elems = 0, ifaces = 0;
+};
+
+// A process's part of one frame.
+struct FramePart : OwnRows {
+  double time = 0;
+  long step = 0;
   const double* x = nullptr;       // nodes x dim: current positions
   const double* u = nullptr;       // nodes x dim
   const double* v = nullptr;       // nodes x dim
@@ -29,6 +32,20 @@ struct FramePart {
   const double* damage = nullptr;  // ifaces
   bool has_fragment = false;       // the same on every process
   const int* fragment = nullptr;   // elems: the own elements' fragment ids
+};
+
+// A process's rows of the group /mesh (the datasets SnapshotWriter writes from a whole mesh), for
+// a run whose whole mesh no process holds (src/solver/local_setup.hpp); node numbers are the whole
+// mesh's.
+struct MeshPart : OwnRows {
+  const double* X = nullptr;        // nodes x dim: reference coordinates
+  const int* elements = nullptr;    // elems x (dim + 1): whole node numbers
+  const int* region = nullptr;      // elems
+  const int* interfaces = nullptr;  // ifaces x dim: side A's whole node numbers
+  bool with_material = false;       // /mesh/interface_material (the same on every process)
+  const int* material = nullptr;    // ifaces
+  bool with_strength = false;       // /mesh/strength_factor (the same on every process)
+  const double* strength = nullptr; // ifaces
 };
 
 // The frames of a run over several processes: an MPI-IO access property list
@@ -45,8 +62,12 @@ class ParallelFrames {
   // must exist with its /mesh and be closed everywhere else. Throws InputError naming the file on
   // an HDF5 error (the run's main then ends every process).
   void write(const std::string& dir, const FramePart& part) const;
+  // Collective, before the first frame: the datasets of /mesh from every process's rows (the
+  // group, its sizes and names written by process 0's SnapshotWriter shell, closed).
+  void write_mesh(const std::string& dir, const MeshPart& part) const;
 
  private:
+  long long open(const std::string& path) const;
   long long fapl_;
   mutable long long file_ = -1;
 };

@@ -171,9 +171,10 @@ void write_names(hid_t mesh_g, const std::vector<std::string>& names, const std:
                     {static_cast<hsize_t>(names.size())}, buf.data(), path);
 }
 
-// The group /mesh: sizes, topology, regions, interfaces (A-side nodes), reference coordinates;
-// then flushes the file.
-void write_mesh_group(hid_t file, const HostMesh& mesh, const MeshSizes& m, const std::string& path) {
+// The group /mesh with its sizes and region names, without its datasets (those of a run over
+// processes may come from every process's rows: src/io/snapshot_parallel.hpp); flushed.
+void create_mesh_group(hid_t file, const MeshSizes& m, const std::vector<std::string>& region_names,
+                       const std::string& path) {
   Id mesh_g(H5Gcreate2(file, "/mesh", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
   if (!mesh_g.ok()) h5::fail(path, "cannot create group '/mesh'");
   const hid_t g = mesh_g.get();
@@ -181,7 +182,16 @@ void write_mesh_group(hid_t file, const HostMesh& mesh, const MeshSizes& m, cons
   write_int_attr(g, "num_nodes", m.nn, path);
   write_int_attr(g, "num_elements", m.ne, path);
   write_int_attr(g, "num_interfaces", m.ni, path);
+  if (!region_names.empty()) write_names(g, region_names, path);
+  if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush");
+}
 
+// The datasets of /mesh: topology, regions, interfaces (A-side nodes), reference coordinates;
+// then flushes the file.
+void write_mesh_datasets(hid_t file, const HostMesh& mesh, const MeshSizes& m, const std::string& path) {
+  Id mesh_g(H5Gopen2(file, "/mesh", H5P_DEFAULT), H5Gclose);
+  if (!mesh_g.ok()) h5::fail(path, "cannot open group '/mesh'");
+  const hid_t g = mesh_g.get();
   const hsize_t npe = static_cast<hsize_t>(m.dim + 1);
   if (mesh.elems.size() != static_cast<size_t>(m.ne) * npe) {
     throw std::logic_error("SnapshotWriter: mesh.elems size is not a multiple of dim+1");
@@ -191,8 +201,6 @@ void write_mesh_group(hid_t file, const HostMesh& mesh, const MeshSizes& m, cons
   std::vector<int> region(static_cast<size_t>(m.ne), 0);
   if (mesh.elem_region.size() == region.size()) region = mesh.elem_region;
   write_ints(g, "region", {static_cast<hsize_t>(m.ne)}, region.data(), path);
-
-  if (!mesh.region_names.empty()) write_names(g, mesh.region_names, path);
 
   std::vector<int> itopo(static_cast<size_t>(m.ni) * m.dim);
   for (int i = 0; i < m.ni; ++i)
@@ -218,6 +226,19 @@ SnapshotWriter::SnapshotWriter(const std::string& dir, const HostMesh& mesh)
       ne_(mesh.num_elems()),
       ni_(mesh.num_ifaces()) {
   create(mesh);
+}
+
+SnapshotWriter::SnapshotWriter(const std::string& dir, const MeshShell& shell)
+    : dir_(dir.empty() ? std::string(".") : dir),
+      dim_(shell.dim),
+      nn_(static_cast<int>(shell.nodes)),
+      ne_(static_cast<int>(shell.elems)),
+      ni_(static_cast<int>(shell.ifaces)),
+      shell_(true) {
+  HostMesh names;
+  names.dim = shell.dim;
+  names.region_names = shell.region_names;
+  create(names);
 }
 
 SnapshotWriter::SnapshotWriter(const std::string& dir, const HostMesh& mesh,
@@ -294,7 +315,8 @@ void SnapshotWriter::create(const HostMesh& mesh) {
   const hid_t file = create_file(path);
   file_ = static_cast<long long>(file);
   try {
-    write_mesh_group(file, mesh, MeshSizes{dim_, nn_, ne_, ni_}, path);
+    create_mesh_group(file, MeshSizes{dim_, nn_, ne_, ni_}, mesh.region_names, path);
+    if (!shell_) write_mesh_datasets(file, mesh, MeshSizes{dim_, nn_, ne_, ni_}, path);
   } catch (...) {
     H5Fclose(file);
     file_ = -1;
@@ -327,6 +349,27 @@ void SnapshotWriter::add_interface_fields(const std::vector<std::string>& names,
   istrength_ = !strength.empty();
   if (H5Fflush(file, H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush");
   write_xdmf();
+}
+
+void SnapshotWriter::write_mesh(const HostMesh& mesh) {
+  const std::string path = (fs::path(dir_) / kH5Name).string();
+  if (!shell_ || file_ < 0) throw std::logic_error("SnapshotWriter::write_mesh: not a shell, or the file is closed");
+  if (mesh.num_nodes() != nn_ || mesh.num_elems() != ne_ || mesh.num_ifaces() != ni_ || mesh.dim != dim_)
+    throw std::logic_error("SnapshotWriter::write_mesh: another mesh than the shell's");
+  write_mesh_datasets(static_cast<hid_t>(file_), mesh, MeshSizes{dim_, nn_, ne_, ni_}, path);
+  shell_ = false;
+}
+
+void SnapshotWriter::interface_fields_by_rows(const std::vector<std::string>& names, bool strength) {
+  const std::string path = (fs::path(dir_) / kH5Name).string();
+  if (!shell_ || file_ < 0)
+    throw std::logic_error("SnapshotWriter::interface_fields_by_rows: not a shell, or the file is closed");
+  Id g(H5Gopen2(static_cast<hid_t>(file_), "/mesh", H5P_DEFAULT), H5Gclose);
+  if (!g.ok()) h5::fail(path, "cannot open group '/mesh'");
+  write_names(g.get(), names, path, "interface_material_names");
+  if (H5Fflush(static_cast<hid_t>(file_), H5F_SCOPE_GLOBAL) < 0) h5::fail(path, "cannot flush");
+  imat_ = true;
+  istrength_ = strength;
 }
 
 void SnapshotWriter::close_file() {

@@ -212,10 +212,12 @@ double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, doubl
 
 }  // namespace
 
-MeshQuality mesh_quality(const HostMesh& mesh) {
+MeshQuality mesh_quality(const HostMesh& mesh) { return mesh_quality(mesh, mesh.num_elems()); }
+
+MeshQuality mesh_quality(const HostMesh& mesh, int elems) {
   MeshQuality q;
   const int dim = mesh.dim;
-  const int ne = mesh.num_elems();
+  const int ne = std::min(elems, mesh.num_elems());
   if (ne == 0 || (dim != 2 && dim != 3)) return q;
   const double pi = std::acos(-1.0);
   q.min_angle_deg = std::numeric_limits<double>::infinity();
@@ -245,6 +247,8 @@ MeshQuality mesh_quality(const HostMesh& mesh) {
                                                    : std::numeric_limits<double>::infinity());
   }
   q.mean_size = edge_count ? edge_sum / static_cast<double>(edge_count) : 0.0;
+  q.edge_sum = edge_sum;
+  q.edge_count = static_cast<long>(edge_count);
   return q;
 }
 

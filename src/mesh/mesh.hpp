@@ -194,7 +194,11 @@ struct MeshQuality {
   double min_size = 0;         // shortest altitude (the length that sets the time step)
   double mean_size = 0;        // mean edge length
   double min_measure = 0;      // smallest area/volume
+  double edge_sum = 0;         // the edges' lengths summed (each element's), and their count:
+  long edge_count = 0;         // mean_size = edge_sum / edge_count
 };
 MeshQuality mesh_quality(const HostMesh& mesh);
+// The same over the mesh's first `elems` elements (a part's own elements: src/parallel).
+MeshQuality mesh_quality(const HostMesh& mesh, int elems);
 
 }  // namespace fdem

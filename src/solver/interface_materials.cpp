@@ -109,6 +109,11 @@ double strength_factor(const StrengthScatter& s, long q) {
   return 1.0;
 }
 
+bool interface_fields_wanted(const Case& c) {
+  return !c.region_iface_material.empty() || !c.pair_iface_material.empty() || !c.surface_iface_material.empty() ||
+         !c.scatter.distribution.empty();
+}
+
 InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh) {
   InterfaceMaterialMap map;
   const long ni = mesh.num_ifaces();
@@ -180,18 +185,30 @@ InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh)
   return map;
 }
 
-std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh) {
-  // interfaces per (region of side A, region of side B)
-  const size_t nr = mesh.region_names.size(), absent = ~size_t{0};
+std::vector<long> region_pair_counts(const HostMesh& mesh, long ifaces) {
+  const size_t nr = mesh.region_names.size();
   std::vector<long> between(nr * nr, 0);
-  const size_t ni = static_cast<size_t>(mesh.num_ifaces());
-  if (mesh.iface_elems.size() == 2 * ni)
+  const size_t ni = static_cast<size_t>(std::min<long>(ifaces, mesh.num_ifaces()));
+  if (mesh.iface_elems.size() >= 2 * ni)
     for (size_t q = 0; q < ni; ++q)
       ++between[static_cast<size_t>(mesh.elem_region[mesh.iface_elems[2 * q]]) * nr +
                 static_cast<size_t>(mesh.elem_region[mesh.iface_elems[2 * q + 1]])];
+  return between;
+}
+
+std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh) {
+  if (mesh.iface_elems.size() != 2 * static_cast<size_t>(mesh.num_ifaces()))
+    return unused_material_rules(c, mesh.region_names,
+                                 std::vector<long>(mesh.region_names.size() * mesh.region_names.size(), 0));
+  return unused_material_rules(c, mesh.region_names, region_pair_counts(mesh, mesh.num_ifaces()));
+}
+
+std::vector<std::string> unused_material_rules(const Case& c, const std::vector<std::string>& region_names,
+                                               const std::vector<long>& between) {
+  const size_t nr = region_names.size(), absent = ~size_t{0};
   auto index = [&](const std::string& r) {
-    const auto it = std::find(mesh.region_names.begin(), mesh.region_names.end(), r);
-    return it == mesh.region_names.end() ? absent : static_cast<size_t>(it - mesh.region_names.begin());
+    const auto it = std::find(region_names.begin(), region_names.end(), r);
+    return it == region_names.end() ? absent : static_cast<size_t>(it - region_names.begin());
   };
   auto count = [&](const std::string& ra, const std::string& rb) {
     const size_t a = index(ra), b = index(rb);

@@ -25,12 +25,21 @@ struct InterfaceMaterialMap {
 // the factors depend on the seed and the interface's index only (same on every backend and
 // thread count).
 InterfaceMaterialMap interface_material_map(const Case& c, const HostMesh& mesh);
+// Whether the map has per-interface values (materials by place or a strength scatter) for a mesh
+// with interfaces: what the snapshots' /mesh/interface_material shows.
+bool interface_fields_wanted(const Case& c);
 
 // The rules of fracture.region_materials and fracture.pair_materials that apply to no interface
 // of the (whole) mesh: one warning each, naming the case file, the key and the regions. A warning,
 // not an error: a generated mesh (grains) may leave a region out, and the run is still what the
 // rest of the case says.
 std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh);
+// The same from the interfaces' counts per (region of side A, region of side B), row-major over
+// `region_names` (a run whose mesh no process holds sums its parts' counts).
+std::vector<std::string> unused_material_rules(const Case& c, const std::vector<std::string>& region_names,
+                                               const std::vector<long>& between);
+// Those counts over the mesh's first `ifaces` interfaces (a part's own).
+std::vector<long> region_pair_counts(const HostMesh& mesh, long ifaces);
 
 // The strength factor of interface q for a scatter (mean 1), a pure function of (seed, q) (q: the
 // whole mesh's index of the interface, HostMesh::iface_ids on a part).

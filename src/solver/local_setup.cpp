@@ -1,11 +1,13 @@
 // local_setup (local_setup.hpp) and its phases: the coarse mesh and its partition shared, the
 // whole mesh's sizes from each process's own refinement, the part built, the node sets' sizes and
-// the exchange lists from the processes, the whole mesh gathered on process 0.
+// the exchange lists from the processes, the whole mesh's facts summed; and the whole mesh gathered
+// on process 0 when a cut or the serial snapshots need it (gather_whole_mesh).
 #include "solver/local_setup.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
@@ -21,6 +23,9 @@
 #include "parallel/comm.hpp"
 #include "parallel/local_part.hpp"
 #include "solver/contact_system.hpp"
+#include "solver/interface_materials.hpp"
+#include "solver/run_setup.hpp"
+#include "solver/summary.hpp"
 
 namespace fdem {
 
@@ -205,11 +210,65 @@ void complete_from_requests(const Comm& comm, SubMesh& s) {
   complete_lists(s, lists_from_requests(s, from, asked));
 }
 
-// 4. The whole mesh on process 0, from every process's own rows (nodes: position and origin;
-// elements: nodes and region; counted interfaces: nodes and elements; the node sets' own nodes), in
-// the whole mesh's numbering: prepare_mesh's mesh, as the whole set-up makes it (its face sets
-// aside, which nothing after the insertion reads). Empty on the others. One kind of row at a time,
-// each taken into the mesh and let go of before the next (process 0's peak memory).
+}  // namespace
+
+MeshHash own_rows_hash(const SubMesh& s) {
+  const HostMesh& m = s.mesh;
+  const int D = m.dim, npe = D + 1;
+  MeshHash h;
+  std::vector<int> row(static_cast<size_t>(2 * D));
+  for (int n = 0; n < m.owned_nodes; ++n) h.node(s.node_global[n], &m.X[static_cast<size_t>(n) * D], D);
+  for (int e = 0; e < m.owned_elems; ++e) {
+    for (int a = 0; a < npe; ++a) row[a] = s.node_global[m.elems[static_cast<size_t>(e) * npe + a]];
+    h.elem(s.elem_global[e], row.data(), npe);
+  }
+  for (int q = 0; q < m.owned_ifaces; ++q) {
+    for (int a = 0; a < 2 * D; ++a) row[a] = s.node_global[m.ifaces[static_cast<size_t>(q) * 2 * D + a]];
+    h.iface(s.iface_global[q], row.data(), 2 * D);
+  }
+  return h;
+}
+
+namespace {
+
+// 4. The whole mesh's facts from every process's own rows: the mesh hash (own_rows_hash, added
+// over the processes exactly: sum_hashes_over_processes), the mesh report (the quality's minima,
+// maxima and edge sums) and the material rules no interface takes.
+std::string parts_mesh_hash(const Comm& comm, const SubMesh& s) {
+  MeshHash h = own_rows_hash(s);
+  h.sum = sum_hashes_over_processes({h.sum}, [&comm](double* v, int n) { comm.sum(v, n); })[0];
+  return h.hex();
+}
+
+nlohmann::json parts_mesh_report(const Case& c, const Comm& comm, const SubMesh& s) {
+  const HostMesh& m = s.mesh;
+  MeshQuality q = mesh_quality(m, m.owned_elems);
+  double lows[4] = {q.min_angle_deg, -q.max_aspect, q.min_size, q.min_measure};
+  if (m.owned_elems == 0)
+    for (double& v : lows) v = std::numeric_limits<double>::infinity();
+  comm.min(lows, 4);
+  double sums[2] = {q.edge_sum, static_cast<double>(q.edge_count)};
+  comm.sum(sums, 2);
+  q.min_angle_deg = lows[0];
+  q.max_aspect = -lows[1];
+  q.min_size = lows[2];
+  q.min_measure = lows[3];
+  q.edge_sum = sums[0];
+  q.edge_count = static_cast<long>(sums[1]);
+  q.mean_size = q.edge_count ? q.edge_sum / sums[1] : 0.0;
+  const std::vector<long> mine = region_pair_counts(m, m.owned_ifaces);
+  std::vector<double> between(mine.begin(), mine.end());
+  comm.sum(between.data(), static_cast<int>(between.size()));
+  std::vector<std::string> warnings = m.warnings;
+  for (std::string& w : unused_material_rules(c, m.region_names, std::vector<long>(between.begin(), between.end()))) {
+    if (comm.rank() == 0) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+    warnings.push_back(std::move(w));
+  }
+  return mesh_report(s.whole_nodes, s.whole_elems, s.whole_ifaces, q, m.region_names, warnings, m.bodies);
+}
+
+// 5. The whole mesh on process 0 (gather_whole_mesh). One kind of row at a time, each taken into
+// the mesh and let go of before the next (process 0's peak memory).
 //
 // Rows of `width` values per own item (fill(i, row)) gathered into the whole mesh's order; on
 // process 0 take(j, row) for every whole item j.
@@ -224,7 +283,9 @@ void gather_each(const Comm& comm, size_t own, size_t width, const std::vector<i
     for (long j = 0; j < whole; ++j) take(j, &all[static_cast<size_t>(j) * width]);
 }
 
-HostMesh gather_whole(const Comm& comm, const SubMesh& s) {
+}  // namespace
+
+HostMesh gather_whole_mesh(const Comm& comm, const SubMesh& s) {
   const HostMesh& m = s.mesh;
   const int D = m.dim, npe = D + 1, iw = 2 * D + 2;
   const bool root = comm.rank() == 0;
@@ -280,8 +341,6 @@ HostMesh gather_whole(const Comm& comm, const SubMesh& s) {
   return w;
 }
 
-}  // namespace
-
 std::string local_setup_refusal(const Case& c, const HostMesh& coarse, bool restarting) {
   const char* w = std::getenv("FDEM_WHOLE_SETUP");
   if (w && std::string(w) == "1") return "FDEM_WHOLE_SETUP=1";
@@ -329,12 +388,10 @@ LocalSetup local_setup(Case& c, const Comm& comm, const HostMesh& coarse, Partit
   out.part = local_part(b.coarse, b.topo, b.off, b.cpart, comm.size(), comm.rank(), out.reach, facts, nullptr, hooks);
   whole_set_sizes(comm, out.part);
   complete_from_requests(comm, out.part);
+  out.mesh_hash = parts_mesh_hash(comm, out.part);
+  out.mesh_report = parts_mesh_report(c, comm, out.part);
   phase.stop();
-  {
-    setup_times::Phase gather("whole_mesh_gathered");
-    out.whole = gather_whole(comm, out.part);
-  }
-  if (comm.rank() == 0) {
+  if (comm.rank() == 0 && out.reach > 0) {
     out.elem_part.resize(static_cast<size_t>(facts.elems));
     for (size_t e = 0; e < out.elem_part.size(); ++e) out.elem_part[e] = b.cpart[e / b.children];
   }

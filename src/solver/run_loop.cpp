@@ -67,6 +67,7 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
 // process 0) takes the counts from its part, for the summary it does not write.
 template <int D>
 nlohmann::json RunLoop<D>::whole_counts(const SubMesh* part) const {
+  if (!cuts_->mesh_report.is_null()) return cuts_->mesh_report;  // (summed over the processes)
   if (!part || opt_.comm->rank() == 0) return mesh_report(*mesh_);
   return {{"nodes", part->whole_nodes}, {"elements", part->whole_elems}, {"interfaces", part->whole_ifaces}};
 }
@@ -76,6 +77,7 @@ std::unique_ptr<RunSnapshots<D>> RunLoop<D>::early_snapshots(const SubMesh* part
   if (!part) return nullptr;
   setup_times::Phase outputs("output_setup");
   const bool root = opt_.comm->rank() == 0;
+  if (cuts_->mesh_by_parts) return std::make_unique<RunSnapshots<D>>(c_, out_, *part, root);
   if (!restart_) return std::make_unique<RunSnapshots<D>>(c_, out_, *mesh_, nullptr, root);
   RunState s;  // (the snapshots' entries of the checkpoint)
   s.load(*restart_, static_cast<int>(c_.platens.size()));

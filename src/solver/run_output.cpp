@@ -12,6 +12,7 @@
 #include "solver/fragment_bodies.hpp"
 #include "solver/fragment_parts.hpp"
 #include "solver/interface_materials.hpp"
+#include "solver/local_setup.hpp"
 #include "solver/model_builder.hpp"
 
 namespace fdem {
@@ -258,6 +259,87 @@ RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostM
   }
 }
 
+template <int D>
+RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const SubMesh& part, bool writes)
+    : case_(&c), out_(out) {
+  if (!(c.snapshot_interval > 0)) return;
+  rows_ = &part;
+  if (!writes) {
+    gathers_ = true;
+    return;
+  }
+  MeshShell shell;
+  shell.dim = D;
+  shell.nodes = part.whole_nodes;
+  shell.elems = part.whole_elems;
+  shell.ifaces = part.whole_ifaces;
+  shell.region_names = part.mesh.region_names;
+  writer_ = std::make_unique<SnapshotWriter>(out, shell);
+}
+
+template <int D>
+void RunSnapshots<D>::mesh_from_parts(const Simulation<D>& sim, bool own_rows) {
+  const SubMesh& s = *rows_;
+  rows_ = nullptr;
+  const Case& c = *case_;
+  if (!own_rows) {  // (the serial HDF5, or FDEM_GATHER_OUTPUT=1)
+    const HostMesh whole = gather_whole_mesh(sim.parts().comm(), s);
+    if (!writer_) return;
+    writer_->write_mesh(whole);
+    const InterfaceMaterialMap map = interface_material_map(c, whole);
+    std::vector<std::string> names;
+    for (const auto& im : c.interface_materials) names.push_back(im.name);
+    if (!map.material.empty()) writer_->add_interface_fields(names, map.material, map.scale);
+    return;
+  }
+  // (the same choice on every process, from the case: the datasets are created together)
+  const bool fields = s.whole_ifaces > 0 && interface_fields_wanted(c);
+  const bool strength = fields && !c.scatter.distribution.empty();
+  if (writer_) {
+    std::vector<std::string> names;
+    for (const auto& im : c.interface_materials) names.push_back(im.name);
+    if (fields) writer_->interface_fields_by_rows(names, strength);
+    writer_->close_file();
+  }
+  const HostMesh& m = s.mesh;
+  const int npe = D + 1;
+  std::vector<int> elems(static_cast<size_t>(m.owned_elems) * npe), ifaces(static_cast<size_t>(m.owned_ifaces) * D);
+  for (size_t i = 0; i < elems.size(); ++i) elems[i] = s.node_global[m.elems[i]];
+  for (int q = 0; q < m.owned_ifaces; ++q)
+    for (int k = 0; k < D; ++k)
+      ifaces[static_cast<size_t>(q) * D + k] = s.node_global[m.ifaces[static_cast<size_t>(q) * 2 * D + k]];
+  std::vector<int> region(static_cast<size_t>(m.owned_elems), 0);
+  if (m.elem_region.size() >= region.size()) std::copy_n(m.elem_region.begin(), region.size(), region.begin());
+  std::vector<int> material;
+  std::vector<double> factor;
+  if (fields) {
+    const InterfaceMaterialMap map = interface_material_map(c, m);
+    material.assign(static_cast<size_t>(m.owned_ifaces), c.fracture_material);
+    if (!map.material.empty()) std::copy_n(map.material.begin(), material.size(), material.begin());
+    if (strength) factor.assign(map.scale.begin(), map.scale.begin() + m.owned_ifaces);
+  }
+  MeshPart p;
+  static_cast<OwnRows&>(p) = {D,
+                              s.whole_nodes,
+                              s.whole_elems,
+                              s.whole_ifaces,
+                              s.node_global.data(),
+                              s.elem_global.data(),
+                              s.iface_global.data(),
+                              static_cast<size_t>(m.owned_nodes),
+                              static_cast<size_t>(m.owned_elems),
+                              static_cast<size_t>(m.owned_ifaces)};
+  p.X = m.X.data();
+  p.elements = elems.data();
+  p.region = region.data();
+  p.interfaces = ifaces.data();
+  p.with_material = fields;
+  p.material = material.data();
+  p.with_strength = strength;
+  p.strength = factor.data();
+  frames_->write_mesh(out_, p);
+}
+
 bool gather_outputs() {
   const char* g = std::getenv("FDEM_GATHER_OUTPUT");
   return g && std::string(g) == "1";
@@ -281,24 +363,25 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   if ((!writer_ && !gathers_) || sim.step_count == last_step_) return;
   last_step_ = sim.step_count;
   const bool own_rows = parallel(sim);
+  if (rows_) mesh_from_parts(sim, own_rows);
   sim.download(x_, u_, v_, stress_, damage_, !own_rows);  // else gathered on process 0
   if (frag) frag->element_ids(sim, fragment_, !own_rows);  // (collective)
   if (own_rows) {
     if (writer_) writer_->close_file();  // (after its /mesh; a no-op from the second frame on)
     const auto w = sim.whole_rows();
     FramePart p;
+    static_cast<OwnRows&>(p) = {D,
+                                w.nn,
+                                w.ne,
+                                w.ni,
+                                w.nodes.data(),
+                                w.elems.data(),
+                                w.ifaces.data(),
+                                static_cast<size_t>(sim.m.owned_nodes()),
+                                static_cast<size_t>(sim.m.owned_elems()),
+                                static_cast<size_t>(sim.m.owned_ifaces())};
     p.time = sim.t;
     p.step = sim.step_count;
-    p.dim = D;
-    p.whole_nodes = w.nn;
-    p.whole_elems = w.ne;
-    p.whole_ifaces = w.ni;
-    p.node_ids = w.nodes.data();
-    p.elem_ids = w.elems.data();
-    p.iface_ids = w.ifaces.data();
-    p.nodes = static_cast<size_t>(sim.m.owned_nodes());
-    p.elems = static_cast<size_t>(sim.m.owned_elems());
-    p.ifaces = static_cast<size_t>(sim.m.owned_ifaces());
     p.x = x_.data();
     p.u = u_.data();
     p.v = v_.data();

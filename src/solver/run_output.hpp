@@ -116,6 +116,10 @@ class RunSnapshots {
   // part in every frame's gathering (Simulation::download) and writes nothing.
   RunSnapshots(const Case& c, const std::string& out, const HostMesh& mesh, const RunState* restart,
                bool writes = true);
+  // A run over processes whose whole mesh no process holds (solver/local_setup.hpp): /mesh written
+  // at the first frame from every process's own rows of `part` (held by the caller until then), or,
+  // without the parallel HDF5, from the mesh gathered on process 0 for it.
+  RunSnapshots(const Case& c, const std::string& out, const SubMesh& part, bool writes);
   bool on() const { return writer_ != nullptr; }
   int frames() const { return writer_ ? writer_->frames() : 0; }
   // A frame of the present state, unless there is one of this step already.
@@ -126,6 +130,10 @@ class RunSnapshots {
   // Over several processes: each writes its own rows (parallel HDF5) or they are gathered on
   // process 0, which writes them (serial HDF5). Decided at the first frame.
   bool parallel(const Simulation<D>& sim);
+  // The first frame of the second constructor's: /mesh from the parts (collective).
+  void mesh_from_parts(const Simulation<D>& sim, bool own_rows);
+  const Case* case_ = nullptr;
+  const SubMesh* rows_ = nullptr;  // until the first frame: the part /mesh comes from
   std::unique_ptr<SnapshotWriter> writer_;
   bool gathers_ = false;  // takes part in the frames without writing them
   int parallel_ = -1;     // -1: not decided yet; 0: gathered on process 0; 1: ParallelFrames

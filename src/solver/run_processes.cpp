@@ -117,6 +117,7 @@ class ProcessesRun {
 
  private:
   bool local_parts();
+  void gather_for_cut();
   void first_parts();
   std::vector<int> restart_parts(const std::vector<double>& at, PartitionMethod bisection) const;
   void check_every_part_filled(const std::vector<int>& elem_part) const;
@@ -168,6 +169,7 @@ nlohmann::json ProcessesRun::run() {
     // their new owners.
     const auto cut0 = std::chrono::steady_clock::now();
     record_cut(end.cut);
+    gather_for_cut();
     if (root_) cut_anew();
     send_cut();
     cuts_.cut_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cut0).count();
@@ -175,8 +177,9 @@ nlohmann::json ProcessesRun::run() {
 }
 
 // Whether the parts are built locally (process 0 decided in prepare_run: PreparedRun::local), and
-// if so every process's part built (local_setup), the defaults resolved, and on process 0 the
-// whole mesh gathered from the parts: the run loop's and the cuts', as first_parts keeps it.
+// if so every process's part built (local_setup) and the defaults resolved. No process holds the
+// whole mesh: its hash and report are summed over the processes, and process 0 gathers it only at
+// the first cut of the parts anew (gather_for_cut).
 bool ProcessesRun::local_parts() {
   std::vector<char> flag(1, prep_.local ? 1 : 0);
   comm_.broadcast_bytes(flag);
@@ -188,23 +191,26 @@ bool ProcessesRun::local_parts() {
   part_ = std::move(ls.part);
   mean_size_ = ls.mean_size;
   prep_.coarse = HostMesh{};
-  if (!root_) {
-    hold_part_only();
-    return true;
-  }
-  prep_.mesh = std::move(ls.whole);
-  prep_.id.mesh_hash = mesh_hash(prep_.mesh);
-  for (std::string& w : unused_material_rules(c_, prep_.mesh)) {  // (as prepare_mesh)
-    std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
-    prep_.mesh.warnings.push_back(std::move(w));
-  }
+  prep_.id.mesh_hash = ls.mesh_hash;
+  cuts_.mesh_report = std::move(ls.mesh_report);
+  cuts_.mesh_by_parts = true;
+  hold_part_only();
+  if (!root_) return true;
   write_file_atomic(prep_.out + "/case.json", c_.resolved.dump(2) + "\n");
   elem_part_at_start_ = std::move(ls.elem_part);
-  if (ls.reach > 0) {  // kept for cutting the parts anew during the run
-    whole_ = std::make_shared<const HostMesh>(std::move(prep_.mesh));
-    whole_reach_ = ls.reach;
-  }
+  whole_reach_ = ls.reach;  // (a cut gathers the whole mesh: gather_for_cut)
   return true;
+}
+
+// Every process at the first cut of a locally set-up run: the whole mesh gathered on process 0
+// from the parts (the run's first parts, held until now) and kept there for this cut and the next
+// ones (kept_), as the whole set-up keeps it from the start.
+void ProcessesRun::gather_for_cut() {
+  if (!cuts_.mesh_by_parts) return;
+  setup_times::Phase phase("whole_mesh_gathered");
+  HostMesh whole = gather_whole_mesh(comm_, part_);
+  if (root_) kept_.write(whole);
+  cuts_.mesh_by_parts = false;
 }
 
 // Process 0: the partition and the builder of the first parts (receive_part builds each as it is

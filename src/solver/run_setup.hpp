@@ -1,6 +1,7 @@
 #pragma once
 // The set-up that run_case (solver/run.cpp) and the run over several processes
 // (solver/run_processes.cpp) share. Internal to src/solver.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -49,8 +50,22 @@ HostMesh prepare_coarse(const Case& c);
 HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse = nullptr);
 // The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
 std::vector<std::string> region_sets_used(const Case& c);
-// The hash of a mesh's coordinates and connectivity a checkpoint's header keeps.
+// The hash of a mesh's coordinates and connectivity a checkpoint's header keeps: every row's hash
+// (a node's reference coordinates, an element's and an interface's node numbers, each with its kind
+// and whole-mesh index) summed modulo 2^64, so that the processes of a run whose mesh none holds
+// get it by summing their own rows' (solver/local_setup.hpp). 16 hex digits.
+class MeshHash {
+ public:
+  void node(long long id, const double* x, int dim);
+  void elem(long long id, const int* nodes, int count);
+  void iface(long long id, const int* nodes, int count);
+  uint64_t sum = 0;
+  std::string hex() const;
+};
 std::string mesh_hash(const HostMesh& mesh);
+// The hash checkpoints written before 2026-12-07 keep (FNV-1a over the arrays in order): a
+// restart from one of them is still recognised.
+std::string mesh_hash_before_2026_12_07(const HostMesh& mesh);
 
 // A run over several processes (solver/run_processes.cpp): every process calls it.
 nlohmann::json run_over_processes(const std::string& case_path, Case& c, const RunOptions& opt);

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "io/checkpoint.hpp"
 
 namespace fdem {
@@ -81,6 +83,12 @@ struct CutHistory {
   // summary.json fragments.labelling counts the whole invocation's).
   long labellings = 0;
   double label_seconds = 0;
+  // A run whose whole mesh no process holds (solver/local_setup.hpp): summary.json's mesh report,
+  // summed over the processes (every process the same; null otherwise: the run loop takes it from
+  // process 0's whole mesh); and whether process 0 still holds no whole mesh (until the first cut
+  // gathers it): the snapshots' /mesh then comes from every process's rows.
+  nlohmann::json mesh_report;
+  bool mesh_by_parts = false;
 
   // Checkpoint (process 0's whole state): the cuts, rebalances and elements moved so far, and the
   // parts of the last cut when there was one. load takes the counts of a checkpoint that has them

@@ -14,18 +14,24 @@
 namespace fdem {
 
 nlohmann::json mesh_report(const HostMesh& mesh) {
-  const auto q = mesh_quality(mesh);
-  nlohmann::json j = {{"nodes", mesh.num_nodes()},
-                      {"elements", mesh.num_elems()},
-                      {"interfaces", mesh.num_ifaces()},
-                      {"regions", mesh.region_names},
+  return mesh_report(mesh.num_nodes(), mesh.num_elems(), mesh.num_ifaces(), mesh_quality(mesh), mesh.region_names,
+                     mesh.warnings, mesh.bodies);
+}
+
+nlohmann::json mesh_report(long nodes, long elems, long ifaces, const MeshQuality& q,
+                           const std::vector<std::string>& regions, const std::vector<std::string>& warnings,
+                           int bodies) {
+  nlohmann::json j = {{"nodes", nodes},
+                      {"elements", elems},
+                      {"interfaces", ifaces},
+                      {"regions", regions},
                       {"quality",
                        {{"min_angle_deg", q.min_angle_deg},
                         {"max_aspect", q.max_aspect},
                         {"min_altitude_m", q.min_size},
                         {"mean_edge_m", q.mean_size}}}};
-  if (!mesh.warnings.empty()) j["warnings"] = mesh.warnings;
-  if (mesh.bodies > 0) j["bodies"] = mesh.bodies;  // separate bodies at the start (particles)
+  if (!warnings.empty()) j["warnings"] = warnings;
+  if (bodies > 0) j["bodies"] = bodies;  // separate bodies at the start (particles)
   return j;
 }
 

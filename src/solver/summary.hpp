@@ -17,6 +17,11 @@ namespace fdem {
 
 // Counts and quality of a prepared mesh.
 nlohmann::json mesh_report(const HostMesh& mesh);
+// The same from the whole mesh's counts and quality (a run whose whole mesh no process holds sums
+// them over its processes: src/solver/local_setup.hpp).
+nlohmann::json mesh_report(long nodes, long elems, long ifaces, const MeshQuality& q,
+                           const std::vector<std::string>& regions, const std::vector<std::string>& warnings,
+                           int bodies);
 
 // The time step: used, critical, and its parts (and its change when contact's springs applied).
 template <int D>

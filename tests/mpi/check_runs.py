@@ -711,32 +711,54 @@ LOCAL_SETUP = {
 }
 
 
+# Variants on 2 processes: (name, case, settings, environment of both runs). A cut of the parts
+# anew every 300 steps (the test hook: every element to the other process), where the locally set-up
+# run gathers the whole mesh on process 0 for the first time; the snapshots' /mesh gathered on
+# process 0 and written there (FDEM_GATHER_OUTPUT=1) instead of by every process's rows; a strength
+# scatter (the per-interface fields of /mesh written by rows).
+LOCAL_SETUP_VARIANTS = [
+    ("impact3d_refined, cut every 300 steps", *LOCAL_SETUP["impact3d_refined"], {"FDEM_TEST_RECUT": "300"}),
+    ("disc_refined+contact, FDEM_GATHER_OUTPUT=1", *LOCAL_SETUP["disc_refined+contact"], {"FDEM_GATHER_OUTPUT": "1"}),
+    ("impact3d_refined, strength scatter", LOCAL_SETUP["impact3d_refined"][0],
+     LOCAL_SETUP["impact3d_refined"][1] + ['fracture.scatter={"distribution": "weibull", "modulus": 6, "seed": 3}'],
+     None),
+]
+
+
 def check_local_setup(fdem):
     """Each process builds its part from the coarse mesh: the run is the one of the whole set-up
     (FDEM_WHOLE_SETUP=1: process 0 refines, inserts and cuts the whole mesh) to the bit: history.csv,
-    fragments.csv and snapshots.h5 (frames and /mesh). A jitter (drawn over the whole mesh) takes the
-    whole set-up."""
-    for name, (case, sets) in LOCAL_SETUP.items():
-        for n in (2, 3):
-            out = {}
-            for how, env in (("local", None), ("whole", {"FDEM_WHOLE_SETUP": "1"})):
-                out[how] = os.path.join(WORK, f"{name}-{how}-{n}")
-                r = run(fdem, n, case, sets, out[how], env=env)
-                check(r.returncode == 0, f"{name}, {n} processes, {how} set-up: exit {r.returncode}")
-                if r.returncode != 0:
-                    print(r.stderr[-3000:])
-            if not all(os.path.exists(os.path.join(o, "summary.json")) for o in out.values()):
-                continue
-            check("local_parts" in setup_phases(out["local"]) and "decomposition" not in setup_phases(out["local"])
-                  and "decomposition" in setup_phases(out["whole"]),
-                  f"{name}, {n} processes: the parts built locally (summary.json setup phases), and not with "
-                  "FDEM_WHOLE_SETUP=1")
-            same = all(same_file(os.path.join(out["local"], f), os.path.join(out["whole"], f))
-                       for f in ("history.csv", "fragments.csv"))
-            frames, why = same_frames(out["local"], out["whole"])
-            check(same and frames and same_mesh_group(out["local"], out["whole"]),
-                  f"{name}, {n} processes: history.csv, fragments.csv and snapshots.h5 the same bits with the "
-                  f"whole set-up ({why})")
+    fragments.csv and snapshots.h5 (frames and /mesh, which no process holds whole: written by every
+    process's rows, or gathered for the serial HDF5 or a cut). A jitter (drawn over the whole mesh)
+    takes the whole set-up."""
+    runs = [(name, case, sets, n, None) for name, (case, sets) in LOCAL_SETUP.items() for n in (2, 3)]
+    runs += [(name, case, sets, 2, env) for name, case, sets, env in LOCAL_SETUP_VARIANTS]
+    for name, case, sets, n, more in runs:
+        out = {}
+        for how, env in (("local", more), ("whole", dict(more or {}, FDEM_WHOLE_SETUP="1"))):
+            out[how] = os.path.join(WORK, f"{name}-{how}-{n}".replace(" ", "_").replace(",", ""))
+            r = run(fdem, n, case, sets, out[how], env=env)
+            check(r.returncode == 0, f"{name}, {n} processes, {how} set-up: exit {r.returncode}")
+            if r.returncode != 0:
+                print(r.stderr[-3000:])
+        if not all(os.path.exists(os.path.join(o, "summary.json")) for o in out.values()):
+            continue
+        with open(os.path.join(out["local"], "summary.json")) as f:
+            cuts = json.load(f)["processes"].get("contact_recuts", 0)
+        local = setup_phases(out["local"])
+        # (a cut adds its phases: the whole mesh gathered on process 0 at the first, then decomposed)
+        check("local_parts" in local and ("decomposition" in local) == (cuts > 0)
+              and ("whole_mesh_gathered" in local) == (cuts > 0) and "local_parts" not in setup_phases(out["whole"]),
+              f"{name}, {n} processes: the parts built locally, the whole mesh gathered only at a cut "
+              f"({cuts} cuts; summary.json setup phases), and not with FDEM_WHOLE_SETUP=1")
+        same = all(same_file(os.path.join(out["local"], f), os.path.join(out["whole"], f))
+                   for f in ("history.csv", "fragments.csv"))
+        frames, why = same_frames(out["local"], out["whole"])
+        check(same and frames and same_mesh_group(out["local"], out["whole"]),
+              f"{name}, {n} processes: history.csv, fragments.csv and snapshots.h5 the same bits with the "
+              f"whole set-up ({why})")
+        if more and "FDEM_TEST_RECUT" in more:
+            check(cuts >= 3, f"{name}, {n} processes: the parts cut anew {cuts} times (>= 3)")
     out = os.path.join(WORK, "disc_refined-jitter-2")
     r = run(fdem, 2, CASES["disc"][0], CASES["disc_refined"][1] + ['mesh.jitter={"amplitude": 0.1}'], out)
     check(r.returncode == 0 and "decomposition" in setup_phases(out),
