@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include "common/huge_pages.hpp"
 #include "test_files.hpp"
 
 namespace {
@@ -175,6 +176,35 @@ TEST(Cli, OneThreadRunsAreNotAllPinnedToTheFirstCore) {
   EXPECT_NE(all_txt.find("OMP_PROC_BIND=spread OMP_PLACES=threads"), std::string::npos) << all_txt;
   EXPECT_EQ(all_txt.find("OMP_PROC_BIND environment variable not set"), std::string::npos) << all_txt;
   EXPECT_EQ(one.find("OMP_PROC_BIND environment variable not set"), std::string::npos) << one;
+  fs::remove_all(out);
+}
+
+// Huge pages for the heap (src/common/huge_pages.hpp): where the kernel gives transparent huge
+// pages on request (mode madvise), fdem asks for them through glibc's tunable and starts again with
+// it; not with FDEM_HUGE_PAGES=0, nor over the user's own setting of the tunable. `fdem info` says
+// which.
+TEST(Cli, HugePagesAskedWhereTheKernelGivesThemOnRequest) {
+  const std::string out = tmpdir("hugepages");
+  fs::create_directories(out);
+  const std::string mode = fdem::transparent_huge_pages_mode();
+  const std::string clean = "env -u GLIBC_TUNABLES -u FDEM_NO_REEXEC -u FDEM_HUGE_PAGES ";
+  auto info = [&](const std::string& env, const std::string& name) {
+    EXPECT_EQ(run(clean + env + " " + FDEM_BINARY + " info > " + out + "/" + name + " 2>&1"), 0);
+    return slurp(out + "/" + name);
+  };
+  const std::string asked = info("", "asked.txt"), off = info("FDEM_HUGE_PAGES=0", "off.txt"),
+                    own = info("GLIBC_TUNABLES=glibc.malloc.hugetlb=0", "own.txt");
+  if (mode == "madvise") {
+    EXPECT_NE(asked.find("huge pages for the heap: on (glibc.malloc.hugetlb=1, kernel mode madvise)"),
+              std::string::npos)
+        << asked;
+    EXPECT_NE(off.find("huge pages for the heap: off (kernel mode madvise"), std::string::npos) << off;
+    EXPECT_NE(own.find("huge pages for the heap: off (kernel mode madvise"), std::string::npos) << own;
+  } else if (mode == "always") {
+    EXPECT_NE(asked.find("huge pages for the heap: on (kernel mode always)"), std::string::npos) << asked;
+  } else {
+    EXPECT_NE(asked.find("huge pages for the heap: off"), std::string::npos) << asked;
+  }
   fs::remove_all(out);
 }
 

@@ -20,6 +20,7 @@
 #include <Kokkos_Core.hpp>
 
 #include "common/error.hpp"
+#include "common/huge_pages.hpp"
 #include "common/kernel_times.hpp"
 #include "common/view_memory.hpp"
 #include "fdem_version.hpp"
@@ -55,6 +56,7 @@ void print_info() {
     const char* places = std::getenv("OMP_PLACES");
     std::printf("cores available: %d; thread binding: OMP_PROC_BIND=%s OMP_PLACES=%s\n", cores,
                 bind ? bind : "(unset)", places ? places : "(unset)");
+    std::printf("huge pages for the heap: %s\n", fdem::huge_pages_state().c_str());
   }
   std::printf("enabled backends:");
 #ifdef KOKKOS_ENABLE_SERIAL
@@ -87,24 +89,34 @@ int requested_threads(int argc, char** argv) {
 }
 
 // OpenMP reads its binding settings when the program loads: if the user set none and the run uses
-// every core it may use, start again once with its threads spread over them (what Kokkos
-// recommends), else Kokkos warns and threads may migrate. A run with fewer threads than cores is
-// not pinned (OMP_PROC_BIND=false, which also keeps Kokkos quiet): pinned, its threads would sit on
-// the first cores, and runs started side by side (a parameter study of one-thread runs) would all
-// share core 0.
-void reexec_with_thread_binding(int argc, char** argv) {
-  if (std::getenv("OMP_PROC_BIND") || std::getenv("FDEM_NO_REEXEC")) return;
-  if (argc > 1 && std::string(argv[1]) == "ensemble") return;  // (its realisations choose for themselves)
+// every core it may use, its threads are spread over them (what Kokkos recommends), else Kokkos
+// warns and threads may migrate. A run with fewer threads than cores is not pinned
+// (OMP_PROC_BIND=false, which also keeps Kokkos quiet): pinned, its threads would sit on the first
+// cores, and runs started side by side (a parameter study of one-thread runs) would all share core
+// 0. True when the settings changed so that the program must start again for OpenMP to read them.
+bool bind_threads(int argc, char** argv) {
+  if (std::getenv("OMP_PROC_BIND")) return false;
   cpu_set_t mask;
   CPU_ZERO(&mask);
   const int cores = sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
   const int threads = requested_threads(argc, argv);
   if (threads > 0 && cores > 0 && threads < cores) {
     setenv("OMP_PROC_BIND", "false", 1);
-    return;
+    return false;
   }
   setenv("OMP_PROC_BIND", "spread", 1);
   setenv("OMP_PLACES", "threads", 1);
+  return true;
+}
+
+// The settings read when the program loads (the thread binding; glibc's tunable for huge pages,
+// common/huge_pages.hpp): where they change, start again once with them.
+void reexec_with_settings(int argc, char** argv) {
+  if (std::getenv("FDEM_NO_REEXEC")) return;
+  if (argc > 1 && std::string(argv[1]) == "ensemble") return;  // (its realisations choose for themselves)
+  bool again = bind_threads(argc, argv);
+  again = fdem::ask_for_huge_pages() || again;
+  if (!again) return;
   setenv("FDEM_NO_REEXEC", "1", 1);
   execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
 }
@@ -328,7 +340,7 @@ int dispatch(const CLI::App& app, const CliOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  reexec_with_thread_binding(argc, argv);
+  reexec_with_settings(argc, argv);
   CLI::App app{"fdem: combined continuous-discontinuous fracture simulator (2D/3D, explicit)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("fdem ") + FDEM_VERSION_STRING);

@@ -365,6 +365,7 @@ LocalSetup local_setup(Case& c, const Comm& comm, const HostMesh& coarse, Partit
   double min_size = 0;
   LocalHooks hooks;
   {
+    setup_times::Phase sizes("local_sizes");  // (inside local_parts: counted once)
     RefinedPart own = refine_elements(b.coarse, b.topo, own_elems);
     hooks = rotation_hooks(c, comm, b, own.mesh);
     if (hooks.refined) hooks.refined(own.mesh);
@@ -385,11 +386,16 @@ LocalSetup local_setup(Case& c, const Comm& comm, const HostMesh& coarse, Partit
   facts.min_size = min_size;
   facts.warnings = b.coarse.warnings;
   facts.bodies = b.coarse.bodies;
-  out.part = local_part(b.coarse, b.topo, b.off, b.cpart, comm.size(), comm.rank(), out.reach, facts, nullptr, hooks);
+  {
+    setup_times::Phase part("local_part");
+    out.part = local_part(b.coarse, b.topo, b.off, b.cpart, comm.size(), comm.rank(), out.reach, facts, nullptr, hooks);
+  }
+  setup_times::Phase facts_phase("local_whole_facts");
   whole_set_sizes(comm, out.part);
   complete_from_requests(comm, out.part);
   out.mesh_hash = parts_mesh_hash(comm, out.part);
   out.mesh_report = parts_mesh_report(c, comm, out.part);
+  facts_phase.stop();
   phase.stop();
   if (comm.rank() == 0 && out.reach > 0) {
     out.elem_part.resize(static_cast<size_t>(facts.elems));

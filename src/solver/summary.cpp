@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/huge_pages.hpp"
 #include "common/kernel_times.hpp"
 #include "common/view_memory.hpp"
 #include "common/setup_times.hpp"
@@ -223,7 +224,8 @@ nlohmann::json run_summary(const Case& c, const nlohmann::json& counts, Simulati
   const double peak = setup_times::peak_rss_bytes();
   summary["memory"] = {{"peak_rss_bytes", peak},
                        {"peak_rss_bytes_per_element", peak / std::max(1, sim.m.ne)},
-                       {"gmsh_peak_rss_bytes", setup_times::gmsh_peak_bytes()}};
+                       {"gmsh_peak_rss_bytes", setup_times::gmsh_peak_bytes()},
+                       {"huge_pages", huge_pages_state()}};  // (common/huge_pages.hpp)
   if (view_memory::enabled()) {
     // the Views' peak (what a GPU would hold, less the host's scatter copies): docs/performance.md
     nlohmann::json vm = view_memory::report(64);  // (every View of a run: about 60)
@@ -272,7 +274,8 @@ namespace {
 nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
   static const std::vector<std::string> names = {
       "gmsh_meshing", "gmsh_extraction", "gmsh_process", "mesh", "refinement", "mesh_transforms",
-      "mesh_checks", "renumbering", "interface_insertion", "local_parts", "whole_mesh_gathered", "decomposition",
+      "mesh_checks", "renumbering", "interface_insertion", "local_parts", "local_sizes", "local_part",
+      "local_whole_facts", "whole_mesh_gathered", "decomposition",
       "parts_sent", "mesh_kept",
       "model_elements", "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
   const nlohmann::json st = setup_times::report();
