@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <map>
 #include <string>
@@ -463,10 +464,12 @@ void Decomposer::order_ghost_nodes(int p, PartItems& it) {
     for (int a = 0; a < 2 * D_; ++a) nlocal_[inode(q, a)] = 1;
   if (zoned_)  // contact reads every ghost (the faces and nodes of the zone, their velocities)
     for (int n : nds) nlocal_[n] = 1;
-  std::sort(nds.begin(), nds.end(), [&](int a, int b) {
-    const bool ra = nlocal_[a] == 1, rb = nlocal_[b] == 1;
-    return ra != rb ? ra : a < b;
-  });
+  // (the nodes a step reads first, each group in the whole mesh's order: sorted as one key each)
+  std::vector<std::uint64_t> key(nds.size());
+  for (size_t j = 0; j < nds.size(); ++j)
+    key[j] = (static_cast<std::uint64_t>(nlocal_[nds[j]] == 1 ? 0 : 1) << 32) | static_cast<std::uint32_t>(nds[j]);
+  std::sort(key.begin(), key.end());
+  for (size_t j = 0; j < nds.size(); ++j) nds[j] = static_cast<int>(key[j] & 0xffffffffu);
   for (int n : nds) it.inert += nlocal_[n] != 1;
   for (int n : nds) nlocal_[n] = -1;
   for (int n : own_.own_nodes[p]) nlocal_[n] = -1;
@@ -479,13 +482,18 @@ void Decomposer::order_ghost_nodes(int p, PartItems& it) {
 void Decomposer::order_interfaces(int p, PartItems& it) {
   const std::vector<int>& owner = own_.owner;
   for (size_t j = 0; j < it.els.size(); ++j) elocal_[it.els[j]] = static_cast<int>(j);
-  std::sort(it.ifs.begin(), it.ifs.end(), [&](int a, int b) {
-    const bool ca = owner[inode(a, 0)] == p, cb = owner[inode(b, 0)] == p;
-    if (ca != cb) return ca;
-    const int la = elocal_[w_.iface_elems[2 * static_cast<size_t>(a)]];
-    const int lb = elocal_[w_.iface_elems[2 * static_cast<size_t>(b)]];
-    return la != lb ? la < lb : a < b;
-  });
+  // one key per interface (counted first; the side-A element's local index, -1 first; the whole
+  // mesh's index), sorted as integers: the order of comparing the three in turn, without looking
+  // them up again at every comparison (a quarter of the cut's time at 3.9e6 own elements)
+  std::vector<std::uint64_t> key(it.ifs.size());
+  for (size_t j = 0; j < key.size(); ++j) {
+    const int q = it.ifs[j];
+    const std::uint64_t counted = owner[inode(q, 0)] == p ? 0 : 1;
+    const auto la = static_cast<std::uint64_t>(elocal_[w_.iface_elems[2 * static_cast<size_t>(q)]] + 1);
+    key[j] = (counted << 63) | (la << 31) | static_cast<std::uint64_t>(q);
+  }
+  std::sort(key.begin(), key.end());
+  for (size_t j = 0; j < key.size(); ++j) it.ifs[j] = static_cast<int>(key[j] & 0x7fffffffu);
   it.io = static_cast<int>(
       std::count_if(it.ifs.begin(), it.ifs.end(), [&](int q) { return owner[inode(q, 0)] == p; }));
 }
