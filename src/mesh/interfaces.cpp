@@ -245,11 +245,21 @@ void build_interfaces(const HostMesh& mesh, const std::vector<bool>& fracturable
   const int ne = mesh.num_elems();
   const bool keep_keys = !mesh.face_sets.empty();  // for fill_iface_sets
   auto frac = [&](int e) { return static_cast<bool>(fracturable[mesh.elem_region[e]]); };
+  auto inserted = [&](int e, int f) {
+    const int b = neighbour[static_cast<std::size_t>(e) * npe + f];
+    if (b <= e) return false;  // boundary face, or already handled from the lower-index side
+    return frac(e) || frac(b) || (!cut.empty() && cut[static_cast<std::size_t>(e) * npe + f]);
+  };
+  std::size_t count = 0;  // (counted first: the arrays are filled without growing)
+  for (int e = 0; e < ne; ++e)
+    for (int f = 0; f < npe; ++f) count += inserted(e, f);
+  ifaces.reserve(ifaces.size() + 2 * dim * count);
+  iface_elems.reserve(iface_elems.size() + 2 * count);
+  if (keep_keys) iface_keys.reserve(iface_keys.size() + count);
   for (int e = 0; e < ne; ++e)
     for (int f = 0; f < npe; ++f) {
+      if (!inserted(e, f)) continue;
       const int b = neighbour[static_cast<std::size_t>(e) * npe + f];
-      if (b <= e) continue;  // boundary face, or already handled from the lower-index side
-      if (!frac(e) && !frac(b) && (cut.empty() || !cut[static_cast<std::size_t>(e) * npe + f])) continue;
       int a_nodes[3], b_nodes[3];
       std::array<int, 3> key{-1, -1, -1};
       for (int k = 0; k < dim; ++k) {
@@ -303,14 +313,29 @@ void remap_node_sets(HostMesh& mesh, const std::vector<int>& origin) {
   for (int o = 0; o < nn; ++o) start[o + 1] += start[o];
   std::vector<int> copies(nn_new), fill(start.begin(), start.end() - 1);
   for (int n = 0; n < nn_new; ++n) copies[fill[origin[n]]++] = n;
+  std::vector<char> in;  // (a large set: its copies marked, then read in order, without a sort)
   for (auto& [name, set] : mesh.node_sets) {
     std::vector<int> out;
-    for (int o : set) {
-      if (o < 0 || o >= nn) continue;
-      out.insert(out.end(), copies.begin() + start[o], copies.begin() + start[o + 1]);
+    if (set.size() > static_cast<std::size_t>(nn) / 16) {
+      in.assign(static_cast<std::size_t>(nn_new), 0);
+      std::size_t marked = 0;
+      for (int o : set)
+        if (o >= 0 && o < nn)
+          for (int j = start[o]; j < start[o + 1]; ++j) {
+            marked += !in[copies[j]];
+            in[copies[j]] = 1;
+          }
+      out.reserve(marked);
+      for (int n = 0; n < nn_new; ++n)
+        if (in[n]) out.push_back(n);
+    } else {
+      for (int o : set) {
+        if (o < 0 || o >= nn) continue;
+        out.insert(out.end(), copies.begin() + start[o], copies.begin() + start[o + 1]);
+      }
+      std::sort(out.begin(), out.end());
+      out.erase(std::unique(out.begin(), out.end()), out.end());
     }
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
     set.swap(out);
   }
 }
