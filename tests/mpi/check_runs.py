@@ -1228,12 +1228,15 @@ def main():
     # SIGTERM to mpirun (which passes it on to the processes): they stop together at the same step,
     # process 0 writes the checkpoint and summary.json (stop reason "interrupted"), nothing hangs;
     # the restart on as many processes ends where the run that was not stopped ends, to the bit
+    # (12 000 steps, about 4 s: mpirun takes about 0.25 s to pass the signal on, and with 3 000 steps
+    # a run whose set-up had got faster ended before it arrived)
     sig_case = CASES["impact3d"][0]
-    sig_sets = COMMON + ["parameters.h=0.006", "time.max_steps=3000", "output.history_rows=3000",
+    sig_steps = 12000
+    sig_sets = COMMON + ["parameters.h=0.006", f"time.max_steps={sig_steps}", "output.history_rows=3000",
                          "output.snapshot_count=0"]
     ref = os.path.join(WORK, "uninterrupted")
     r = run(fdem, 2, sig_case, sig_sets, ref)
-    check(r.returncode == 0, f"3D impact, 3000 steps, 2 processes: exit {r.returncode}")
+    check(r.returncode == 0, f"3D impact, {sig_steps} steps, 2 processes: exit {r.returncode}")
     out = os.path.join(WORK, "interrupted")
     p = subprocess.Popen(command(fdem, 2, sig_case, sig_sets, out), env=ENV, stdout=subprocess.DEVNULL,
                          stderr=subprocess.PIPE, text=True)
@@ -1247,7 +1250,7 @@ def main():
         _, err = p.communicate(timeout=60)
         s = json.load(open(os.path.join(out, "summary.json")))
         check(s.get("stop_reason") == "interrupted" and "interrupted by SIGTERM" in err and
-              "checkpoint" in err and s.get("steps", 3000) < 3000 and "Open MPI's mpirun exits with 1" in err,
+              "checkpoint" in err and s.get("steps", sig_steps) < sig_steps and "Open MPI's mpirun exits with 1" in err,
               f"SIGTERM to mpirun: stopped at step {s.get('steps')}, summary.json stop reason {s.get('stop_reason')}, "
               f"checkpoint written; exit {p.returncode} (mpirun's own), the message says so")
         r = run(fdem, 2, sig_case, sig_sets, out, extra=["--restart", os.path.join(out, "checkpoint.h5")])
