@@ -49,9 +49,12 @@ MEASURED = {
     "state_bytes_per_tet": 930,     # the whole state a cut gathers on process 0
     "views_bytes_per_tet": 1642,    # the device's Views per tetrahedron (one thread), intact
     "peak_bytes_per_own_tet": 2535,  # each process's peak resident memory (1.22 GB for 481 344)
-    # local_part of part 0 (perf/bench_local_part.cpp, 2026-12-07, the machine quiet): its
-    # neighbourhood refined with its interfaces and the part cut, per own tetrahedron
-    "local_part_s_per_own_tet": 2.20 / 481344,
+    # each process's local set-up (summary.json's local_parts with local_sizes, local_part and
+    # local_whole_facts: its coarse elements refined, its neighbourhood refined with its interfaces,
+    # the part cut, the whole mesh's facts summed), per own tetrahedron: the median of four runs of
+    # 10 255 360 tetrahedra on 2 processes at 3a93bbf, with huge pages (docs/parallel.md, "1e7
+    # tetrahedra on this machine": 18.1, 11.3, 10.4, 14.4 s for 5 127 680 own)
+    "local_part_s_per_own_tet": 12.85 / 5127680,
     # process 0 gathering the whole mesh from the parts (a local set-up's first cut; measured when the
     # set-up gathered it, 2026-12-06 evening, fdem run on 2 processes, quiet: summary.json
     # `whole_mesh_gathered`, 0.79 and 0.85 s), per tetrahedron
@@ -147,8 +150,8 @@ def model(m, total, procs, refine):
     rows.append(("set-up, local (fdem run today)", fmt_time(setup_local), fmt_time(setup_local),
                  fmt_time(setup_local),
                  f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
-                 f"their halo (local_part: {1e6 * local_per_tet:.1f} us per own tetrahedron measured on one quiet "
-                 f"thread) and sets its part up; no process holds the whole mesh (its hash, report and the "
+                 f"their halo (local_parts: {1e6 * local_per_tet:.1f} us per own tetrahedron, the median of four runs of "
+                 f"1e7 on this machine with huge pages) and sets its part up; no process holds the whole mesh (its hash, report and the "
                  f"snapshots' /mesh come from every process's rows)"))
     views = per * m["views_bytes_per_tet"]
     rows.append(("memory per process (intact)", f"{views / 1e9:.0f} GB of {GPU['memory'] / 1e9:.0f}",
