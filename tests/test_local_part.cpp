@@ -177,7 +177,8 @@ TEST(LocalPart, WholeMeshHashAndQualityFromTheParts) {
   for (int p = 0; p < 3; ++p) {
     const SubMesh s = builder.part(p);
     ASSERT_LT(s.mesh.owned_elems, s.mesh.num_elems());  // (ghosts, which must not count)
-    sum.sum += own_rows_hash(s).sum;
+    const MeshHash own = own_rows_hash(s);
+    for (int k = 0; k < 3; ++k) sum.sums[k] += own.sums[k];
     const MeshQuality o = mesh_quality(s.mesh, s.mesh.owned_elems);
     min_angle = std::min(min_angle, o.min_angle_deg);
     max_aspect = std::max(max_aspect, o.max_aspect);

@@ -55,6 +55,13 @@ struct CheckpointHeader {
 // FNV-1a 64-bit hash as 16 hex digits.
 std::string hash_hex(const void* data, size_t bytes, uint64_t seed = 1469598103934665603ull);
 uint64_t fnv1a(const void* data, size_t bytes, uint64_t h = 1469598103934665603ull);
+namespace ckpt {
+// The checksum of rows that several processes write: the sum (mod 2^64) over the rows of FNV-1a 64
+// of the row's bytes seeded with the row's index (first_row + r), so that each process adds its
+// rows' terms and the sums add up, in any order; a changed byte or two rows swapped change it.
+// (Also the mesh's hash, MeshHash in src/solver/run_setup.hpp.)
+uint64_t rows_hash(const void* data, size_t rows, size_t row_bytes, uint64_t first_row);
+}  // namespace ckpt
 
 // Writes `path` atomically: to `path`.tmp in the same folder, fsync, rename over `path`, fsync the
 // folder. Until the rename the previous file at `path` stays as it was. Throws InputError naming

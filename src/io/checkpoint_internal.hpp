@@ -41,10 +41,7 @@ void string_attr(hid_t loc, const char* name, const std::string& v, const std::s
 // The checksum of a dataset: FNV-1a 64 of its values' bytes in memory (float64 / int64 of a
 // little-endian host: the file's types) or of the string's characters, as 16 hex digits.
 std::string values_checksum(const void* data, size_t bytes);
-// The checksum of rows that several processes write: the sum (mod 2^64) over the rows of FNV-1a 64
-// of the row's bytes seeded with the row's index (first_row + r), so that each process adds its
-// rows' terms and the sums add up, in any order; a changed byte or two rows swapped change it.
-uint64_t rows_hash(const void* data, size_t rows, size_t row_bytes, uint64_t first_row);
+// (rows_hash: io/checkpoint.hpp)
 std::string hex(uint64_t x);
 // The root checksum: the header's values, then every dataset's name and checksum in name order,
 // so that an altered header attribute or a dataset removed or added shows too.

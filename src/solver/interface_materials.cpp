@@ -197,9 +197,6 @@ std::vector<long> region_pair_counts(const HostMesh& mesh, long ifaces) {
 }
 
 std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& mesh) {
-  if (mesh.iface_elems.size() != 2 * static_cast<size_t>(mesh.num_ifaces()))
-    return unused_material_rules(c, mesh.region_names,
-                                 std::vector<long>(mesh.region_names.size() * mesh.region_names.size(), 0));
   return unused_material_rules(c, mesh.region_names, region_pair_counts(mesh, mesh.num_ifaces()));
 }
 

@@ -38,7 +38,8 @@ std::vector<std::string> unused_material_rules(const Case& c, const HostMesh& me
 // `region_names` (a run whose mesh no process holds sums its parts' counts).
 std::vector<std::string> unused_material_rules(const Case& c, const std::vector<std::string>& region_names,
                                                const std::vector<long>& between);
-// Those counts over the mesh's first `ifaces` interfaces (a part's own).
+// Those counts over the mesh's first `ifaces` interfaces (a part's own); zeros for a mesh without its
+// interfaces' elements.
 std::vector<long> region_pair_counts(const HostMesh& mesh, long ifaces);
 
 // The strength factor of interface q for a scatter (mean 1), a pure function of (seed, q) (q: the

@@ -236,7 +236,9 @@ namespace {
 // maxima and edge sums) and the material rules no interface takes.
 std::string parts_mesh_hash(const Comm& comm, const SubMesh& s) {
   MeshHash h = own_rows_hash(s);
-  h.sum = sum_hashes_over_processes({h.sum}, [&comm](double* v, int n) { comm.sum(v, n); })[0];
+  const std::vector<uint64_t> all = sum_hashes_over_processes({h.sums[0], h.sums[1], h.sums[2]},
+                                                              [&comm](double* v, int n) { comm.sum(v, n); });
+  for (int k = 0; k < 3; ++k) h.sums[k] = all[k];
   return h.hex();
 }
 

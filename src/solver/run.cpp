@@ -167,36 +167,25 @@ void check_restart_matches(const std::string& file, const CheckpointHeader& h, c
 
 }  // namespace
 
-namespace {
-// A row's hash: FNV-1a over (kind, index, values), then SplitMix64's finaliser, so that the sum
-// of many rows' hashes is spread over all 64 bits.
-uint64_t row_hash(long long kind, long long id, const void* values, size_t bytes) {
-  const long long head[2] = {kind, id};
-  uint64_t h = fnv1a(values, bytes, fnv1a(head, sizeof head));
-  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  return h ^ (h >> 31);
+void MeshHash::node(long long id, const double* x, int dim) {
+  sums[0] += ckpt::rows_hash(x, 1, sizeof(double) * dim, static_cast<uint64_t>(id));
 }
-}  // namespace
-
-void MeshHash::node(long long id, const double* x, int dim) { sum += row_hash(0, id, x, sizeof(double) * dim); }
-void MeshHash::elem(long long id, const int* nodes, int count) { sum += row_hash(1, id, nodes, sizeof(int) * count); }
+void MeshHash::elem(long long id, const int* nodes, int count) {
+  sums[1] += ckpt::rows_hash(nodes, 1, sizeof(int) * count, static_cast<uint64_t>(id));
+}
 void MeshHash::iface(long long id, const int* nodes, int count) {
-  sum += row_hash(2, id, nodes, sizeof(int) * count);
+  sums[2] += ckpt::rows_hash(nodes, 1, sizeof(int) * count, static_cast<uint64_t>(id));
 }
 
-std::string MeshHash::hex() const {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(sum));
-  return buf;
-}
+std::string MeshHash::hex() const { return hash_hex(sums, sizeof sums); }
 
 std::string mesh_hash(const HostMesh& mesh) {
-  const int D = mesh.dim, npe = D + 1;
+  // (the whole mesh's rows in order: one call per kind)
+  const size_t D = static_cast<size_t>(mesh.dim);
   MeshHash h;
-  for (int n = 0; n < mesh.num_nodes(); ++n) h.node(n, &mesh.X[static_cast<size_t>(n) * D], D);
-  for (int e = 0; e < mesh.num_elems(); ++e) h.elem(e, &mesh.elems[static_cast<size_t>(e) * npe], npe);
-  for (int q = 0; q < mesh.num_ifaces(); ++q) h.iface(q, &mesh.ifaces[static_cast<size_t>(q) * 2 * D], 2 * D);
+  h.sums[0] = ckpt::rows_hash(mesh.X.data(), mesh.num_nodes(), sizeof(double) * D, 0);
+  h.sums[1] = ckpt::rows_hash(mesh.elems.data(), mesh.num_elems(), sizeof(int) * (D + 1), 0);
+  h.sums[2] = ckpt::rows_hash(mesh.ifaces.data(), mesh.num_ifaces(), sizeof(int) * 2 * D, 0);
   return h.hex();
 }
 

@@ -50,16 +50,16 @@ HostMesh prepare_coarse(const Case& c);
 HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse = nullptr);
 // The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
 std::vector<std::string> region_sets_used(const Case& c);
-// The hash of a mesh's coordinates and connectivity a checkpoint's header keeps: every row's hash
-// (a node's reference coordinates, an element's and an interface's node numbers, each with its kind
-// and whole-mesh index) summed modulo 2^64, so that the processes of a run whose mesh none holds
-// get it by summing their own rows' (solver/local_setup.hpp). 16 hex digits.
-class MeshHash {
- public:
+// The hash of a mesh's coordinates and connectivity a checkpoint's header keeps: for the nodes'
+// reference coordinates, the elements' and the interfaces' node numbers, each kind's rows hashed
+// with their whole-mesh index and summed modulo 2^64 (ckpt::rows_hash, the checksum of a
+// checkpoint's rows), so that the processes of a run whose mesh none holds get it by summing
+// their own rows' (solver/local_setup.hpp); then the three sums hashed, as 16 hex digits.
+struct MeshHash {
+  uint64_t sums[3] = {0, 0, 0};  // nodes, elements, interfaces
   void node(long long id, const double* x, int dim);
   void elem(long long id, const int* nodes, int count);
   void iface(long long id, const int* nodes, int count);
-  uint64_t sum = 0;
   std::string hex() const;
 };
 std::string mesh_hash(const HostMesh& mesh);
