@@ -259,6 +259,24 @@ RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const HostM
   }
 }
 
+namespace {
+// The rows this process writes: its model's own items, with their whole-mesh indices.
+template <int D>
+OwnRows rows_written(const Simulation<D>& sim) {
+  const auto w = sim.whole_rows();  // (references to the decomposition's lists)
+  return {D,
+          w.nn,
+          w.ne,
+          w.ni,
+          w.nodes.data(),
+          w.elems.data(),
+          w.ifaces.data(),
+          static_cast<size_t>(sim.m.owned_nodes()),
+          static_cast<size_t>(sim.m.owned_elems()),
+          static_cast<size_t>(sim.m.owned_ifaces())};
+}
+}  // namespace
+
 template <int D>
 RunSnapshots<D>::RunSnapshots(const Case& c, const std::string& out, const SubMesh& part, bool writes)
     : case_(&c), out_(out) {
@@ -319,16 +337,7 @@ void RunSnapshots<D>::mesh_from_parts(const Simulation<D>& sim, bool own_rows) {
     if (strength) factor.assign(map.scale.begin(), map.scale.begin() + m.owned_ifaces);
   }
   MeshPart p;
-  static_cast<OwnRows&>(p) = {D,
-                              s.whole_nodes,
-                              s.whole_elems,
-                              s.whole_ifaces,
-                              s.node_global.data(),
-                              s.elem_global.data(),
-                              s.iface_global.data(),
-                              static_cast<size_t>(m.owned_nodes),
-                              static_cast<size_t>(m.owned_elems),
-                              static_cast<size_t>(m.owned_ifaces)};
+  static_cast<OwnRows&>(p) = rows_written(sim);  // (the model's items are the part's, in its order)
   p.X = m.X.data();
   p.elements = elems.data();
   p.region = region.data();
@@ -368,18 +377,8 @@ void RunSnapshots<D>::take(Simulation<D>& sim, RunFragments<D>* frag) {
   if (frag) frag->element_ids(sim, fragment_, !own_rows);  // (collective)
   if (own_rows) {
     if (writer_) writer_->close_file();  // (after its /mesh; a no-op from the second frame on)
-    const auto w = sim.whole_rows();
     FramePart p;
-    static_cast<OwnRows&>(p) = {D,
-                                w.nn,
-                                w.ne,
-                                w.ni,
-                                w.nodes.data(),
-                                w.elems.data(),
-                                w.ifaces.data(),
-                                static_cast<size_t>(sim.m.owned_nodes()),
-                                static_cast<size_t>(sim.m.owned_elems()),
-                                static_cast<size_t>(sim.m.owned_ifaces())};
+    static_cast<OwnRows&>(p) = rows_written(sim);
     p.time = sim.t;
     p.step = sim.step_count;
     p.x = x_.data();
