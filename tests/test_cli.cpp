@@ -179,6 +179,24 @@ TEST(Cli, OneThreadRunsAreNotAllPinnedToTheFirstCore) {
   fs::remove_all(out);
 }
 
+// A binding of the user's (OMP_PROC_BIND=spread) survives the start again for huge pages: the
+// OpenMP runtime binds the first thread to one core when the program loads, and the program
+// started again used to inherit that one core, so that all its threads ran on it (two threads as
+// slow as one). `fdem info` counts the cores of the OpenMP places it sees.
+TEST(Cli, AUsersBindingKeepsEveryCoreThroughTheStartAgain) {
+  const long cores = sysconf(_SC_NPROCESSORS_ONLN);
+  if (cores < 2) GTEST_SKIP() << "one core";
+  const std::string out = tmpdir("userbinding");
+  fs::create_directories(out);
+  const std::string all = "taskset -c 0-" + std::to_string(cores - 1);
+  const std::string env = " env -u FDEM_NO_REEXEC -u GLIBC_TUNABLES -u FDEM_HUGE_PAGES OMP_PROC_BIND=spread "
+                          "OMP_PLACES=threads OMP_NUM_THREADS=" + std::to_string(cores) + " ";
+  ASSERT_EQ(run(all + env + FDEM_BINARY + " info > " + out + "/spread.txt 2>&1"), 0);
+  const std::string txt = slurp(out + "/spread.txt");
+  EXPECT_NE(txt.find("cores available: " + std::to_string(cores) + ";"), std::string::npos) << txt;
+  fs::remove_all(out);
+}
+
 // Huge pages for the heap (src/common/huge_pages.hpp): where the kernel gives transparent huge
 // pages on request (mode madvise), fdem asks for them through glibc's tunable and starts again with
 // it; not with FDEM_HUGE_PAGES=0, nor over the user's own setting of the tunable. `fdem info` says

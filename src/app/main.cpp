@@ -4,6 +4,7 @@
 #include <sched.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -18,6 +19,9 @@
 
 #include <CLI/CLI.hpp>
 #include <Kokkos_Core.hpp>
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
 
 #include "common/error.hpp"
 #include "common/huge_pages.hpp"
@@ -37,6 +41,24 @@ namespace {
 // The processes of an MPI run (an MPI build under mpirun; null otherwise).
 std::shared_ptr<fdem::Comm> g_comm;
 
+// The cores of all OpenMP places into `set` (false: none known, or no OpenMP): the runtime took them
+// from the mask the program started with (mpirun's binding of a process included), before it bound
+// this thread to the first place, so they are the cores this process may use, where the mask of
+// this thread may by now be one core.
+bool places_mask(cpu_set_t& set) {
+  CPU_ZERO(&set);
+#if defined(_OPENMP)
+  const int places = omp_get_num_places();
+  for (int p = 0; p < places; ++p) {
+    std::vector<int> ids(static_cast<size_t>(std::max(omp_get_place_num_procs(p), 0)));
+    if (!ids.empty()) omp_get_place_proc_ids(p, ids.data());
+    for (int id : ids)
+      if (id >= 0 && id < CPU_SETSIZE) CPU_SET(id, &set);
+  }
+#endif
+  return CPU_COUNT(&set) > 0;
+}
+
 void print_info() {
   std::printf("fdem %s\n", FDEM_VERSION_STRING);
 #ifdef FDEM_HAVE_MPI
@@ -51,7 +73,7 @@ void print_info() {
   {
     cpu_set_t mask;
     CPU_ZERO(&mask);
-    const int cores = sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
+    const int cores = places_mask(mask) || sched_getaffinity(0, sizeof(mask), &mask) == 0 ? CPU_COUNT(&mask) : 0;
     const char* bind = std::getenv("OMP_PROC_BIND");
     const char* places = std::getenv("OMP_PLACES");
     std::printf("cores available: %d; thread binding: OMP_PROC_BIND=%s OMP_PLACES=%s\n", cores,
@@ -109,6 +131,15 @@ bool bind_threads(int argc, char** argv) {
   return true;
 }
 
+// Where the user set a binding (OMP_PROC_BIND=spread, say), the OpenMP runtime has already bound
+// this thread, when the program loaded, to its first place (one core), and a program started again
+// by exec keeps that mask: its OpenMP would then see one core and put every thread on it (a run on
+// two threads as slow as on one). Before the exec the thread gets back the cores of all the places.
+void restore_affinity() {
+  cpu_set_t set;
+  if (places_mask(set)) sched_setaffinity(0, sizeof(set), &set);
+}
+
 // The settings read when the program loads (the thread binding; glibc's tunable for huge pages,
 // common/huge_pages.hpp): where they change, start again once with them.
 void reexec_with_settings(int argc, char** argv) {
@@ -118,6 +149,7 @@ void reexec_with_settings(int argc, char** argv) {
   again = fdem::ask_for_huge_pages() || again;
   if (!again) return;
   setenv("FDEM_NO_REEXEC", "1", 1);
+  restore_affinity();
   execv("/proc/self/exe", argv);  // returns only on failure: then go on as we are
 }
 
