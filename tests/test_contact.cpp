@@ -263,6 +263,7 @@ BroadResult broad_phase_run(bool clustered, unsigned seed, int np, int nf, doubl
   g.count = Kokkos::View<int*>("count", cap);
   g.offset = Kokkos::View<int*>("offset", cap + 1);
   g.faces = Kokkos::View<int*>("cell_faces", nf);
+  g.box = Kokkos::View<double* [2 * D]>("cell_box", nf);
   const ContactBox<D> box = search_bounds<D>(S);
   grid_geometry<D>(g, box, r, cap);
   grid_bin<D>(g, S);

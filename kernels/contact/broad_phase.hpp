@@ -125,6 +125,10 @@ struct CellGrid {
   Kokkos::View<int*> count;   // per cell (capacity >= ncell); the cursor of the permutation
   Kokkos::View<int*> offset;  // ncell + 1 (capacity)
   Kokkos::View<int*> faces;   // face ids ordered by cell (capacity >= number of faces)
+  // the bounding box of each face of `faces` (the same place), centre 0..D-1 and half extent
+  // D..2D-1 as face_box gives them at the binning's positions: a query tests the boxes of a cell
+  // from this contiguous array instead of reading D random node rows per face
+  Kokkos::View<double* [2 * D]> box;
 };
 // Bounding box of the face centres and the largest face half extent.
 template <int D>
@@ -202,6 +206,7 @@ void grid_bin(const CellGrid<D>& g, const SearchSet<D>& S) {
   auto count = g.count;
   auto offset = g.offset;
   auto cfaces = g.faces;
+  auto cbox = g.box;
   auto x = S.x;
   auto fnode = S.fnode;
   auto faces = S.faces;
@@ -234,8 +239,12 @@ void grid_bin(const CellGrid<D>& g, const SearchSet<D>& S) {
         const int f = faces(i);
         face_box<D>(x, fnode, f, c, e);
         const int id = grid_cell<D>(geo, c, ijk);
-        const int pos = Kokkos::atomic_fetch_add(&count(id), 1);
-        cfaces(offset(id) + pos) = f;
+        const int pos = offset(id) + Kokkos::atomic_fetch_add(&count(id), 1);
+        cfaces(pos) = f;
+        for (int k = 0; k < D; ++k) {
+          cbox(pos, k) = c[k];
+          cbox(pos, D + k) = e[k];
+        }
       });
 }
 
@@ -256,7 +265,8 @@ struct PairList {
 // and written to out(base + i) when `out` is not empty. Returns the count.
 template <int D>
 KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<int*>& offset,
-                                      const Kokkos::View<int*>& cfaces, const Kokkos::View<double* [D]>& x,
+                                      const Kokkos::View<int*>& cfaces, const Kokkos::View<double* [2 * D]>& cbox,
+                                      const Kokkos::View<double* [D]>& x,
                                       const Kokkos::View<int* [D]>& fnode, const PairFilter<D>& F,
                                       double radius, int s, const double (&p)[D],
                                       const Kokkos::View<int*>& out, int base, double tol = -1) {
@@ -280,15 +290,14 @@ KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<in
     }
     for (int k = D - 1; k >= 0; --k) id = id * g.n[k] + c[k];
     for (int q = offset(id); q < offset(id + 1); ++q) {
-      const int f = cfaces(q);
-      double fc[D], fe[D];
-      face_box<D>(x, fnode, f, fc, fe);
       bool near = true;
       for (int k = 0; k < D; ++k) {
-        const double d = p[k] - fc[k];
-        near = near && (d < 0 ? -d : d) <= fe[k] + radius;
+        const double d = p[k] - cbox(q, k);
+        near = near && (d < 0 ? -d : d) <= cbox(q, D + k) + radius;
       }
-      if (!near || pair_excluded<D>(F, fnode, s, f)) continue;
+      if (!near) continue;
+      const int f = cfaces(q);
+      if (pair_excluded<D>(F, fnode, s, f)) continue;
       if (tol >= 0.0 && !face_within<D>(x, fnode, f, p, radius, tol)) continue;
       if (write) out(base + cnt) = f;
       ++cnt;
@@ -315,8 +324,8 @@ int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         const int s = set.points(i);
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
-        o(s) = grid_query<D>(grid.geo, grid.offset, grid.faces, set.x, set.fnode, Fc, set.radius, s, p, none, 0,
-                             set.tol);
+        o(s) = grid_query<D>(grid.geo, grid.offset, grid.faces, grid.box, set.x, set.fnode, Fc, set.radius, s, p,
+                             none, 0, set.tol);
       });
   int total = 0;
   Kokkos::parallel_scan(
@@ -357,8 +366,8 @@ void candidates_fill(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
         const int b = o(s);
-        const int cnt =
-            grid_query<D>(grid.geo, grid.offset, grid.faces, set.x, set.fnode, Fc, set.radius, s, p, pf, b, set.tol);
+        const int cnt = grid_query<D>(grid.geo, grid.offset, grid.faces, grid.box, set.x, set.fnode, Fc, set.radius,
+                                      s, p, pf, b, set.tol);
         for (int a = b + 1; a < b + cnt; ++a) {  // insertion sort: segments are short
           const int val = pf(a);
           int c = a - 1;

@@ -177,6 +177,11 @@ void ContactSystem<D>::ensure_grid(CellGrid<D>& g, int nfaces, bool touched) {
   ensure_ints(g.offset, g.ncell + 1L, touched ? "fdem::contact::tcell_offset" : "fdem::contact::cell_offset");
   ensure_ints(g.faces, std::max(nfaces, 1),
               touched ? "fdem::contact::tcell_faces" : "fdem::contact::cell_faces");
+  if (g.box.extent(0) < g.faces.extent(0))
+    g.box = Kokkos::View<double* [2 * D]>(
+        Kokkos::view_alloc(Kokkos::WithoutInitializing,
+                           std::string(touched ? "fdem::contact::tcell_box" : "fdem::contact::cell_box")),
+        g.faces.extent(0));
 }
 
 // The arrays of the local list update (update_lists), at the first handover with lists.
