@@ -22,6 +22,18 @@ KOKKOS_INLINE_FUNCTION T kmax(T a, T b) { return a > b ? a : b; }
 template <class T>
 KOKKOS_INLINE_FUNCTION T kclamp(T x, T lo, T hi) { return x < lo ? lo : (x > hi ? hi : x); }
 
+// Whether v is +0.0 to the bit (not -0.0, not anything else): a test that some state is exactly
+// what a write of 0.0 would leave, so that a pass may skip the write and keep the same bits.
+KOKKOS_INLINE_FUNCTION bool plus_zero(double v) {
+#if defined(__CUDA_ARCH__) || defined(__HIP_DEVICE_COMPILE__)
+  return __double_as_longlong(v) == 0;
+#else
+  unsigned long long u;
+  __builtin_memcpy(&u, &v, sizeof v);
+  return u == 0ull;
+#endif
+}
+
 // c ? a : b, to the bit, without a branch on host CPUs: where c follows a sign that changes at
 // random from one item to the next (the openings of intact interfaces), the compiler's branch is
 // mispredicted half the time, and a miss costs more than the arithmetic. GPUs select anyway.
