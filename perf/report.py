@@ -953,8 +953,8 @@ class Report:
         for d in runs:
             self.impact_run(d)
         self.w("What is left above the target and why: `docs/performance-impact.md` section 2 (the narrow phase "
-               "grows with the fragments' surface: every candidate's first test reads one face row; the force "
-               "pass stays the same per step).")
+               "grows with the fragments' surface: the work on each candidate within its face's penetration band, "
+               "about half of them; the force pass stays the same per step).")
         self.w()
 
     def impact_run(self, d):
