@@ -130,26 +130,33 @@ struct CellGrid {
   // from this contiguous array instead of reading D random node rows per face
   Kokkos::View<double* [2 * D]> box;
 };
-// Bounding box of the face centres and the largest face half extent.
+// Bounding box of the face centres and the largest face half extent (search_bounds).
+template <int D>
+struct FaceBounds {
+  using value_type = ContactBox<D>;
+  SearchSet<D> S;
+  KOKKOS_INLINE_FUNCTION void operator()(const int i, ContactBox<D>& b) const {
+    double c[D], e[D];
+    face_box<D>(S.x, S.fnode, S.faces(i), c, e);
+    for (int k = 0; k < D; ++k) {
+      b.lo[k] = c[k] < b.lo[k] ? c[k] : b.lo[k];
+      b.hi[k] = c[k] > b.hi[k] ? c[k] : b.hi[k];
+      b.ext = e[k] > b.ext ? e[k] : b.ext;
+    }
+  }
+};
+// The box of S's faces on the host (the host waits for it).
 template <int D>
 ContactBox<D> search_bounds(const SearchSet<D>& S) {
-  auto x = S.x;
-  auto fnode = S.fnode;
-  auto faces = S.faces;
   ContactBox<D> out;
-  Kokkos::parallel_reduce(
-      "fdem::contact::bounds", Kokkos::RangePolicy<ExecSpace>(0, S.nf),
-      KOKKOS_LAMBDA(const int i, ContactBox<D>& b) {
-        double c[D], e[D];
-        face_box<D>(x, fnode, faces(i), c, e);
-        for (int k = 0; k < D; ++k) {
-          b.lo[k] = c[k] < b.lo[k] ? c[k] : b.lo[k];
-          b.hi[k] = c[k] > b.hi[k] ? c[k] : b.hi[k];
-          b.ext = e[k] > b.ext ? e[k] : b.ext;
-        }
-      },
-      out);
+  Kokkos::parallel_reduce("fdem::contact::bounds", Kokkos::RangePolicy<ExecSpace>(0, S.nf), FaceBounds<D>{S}, out);
   return out;
+}
+// The same into device memory (no wait). No face: the empty box (lo 1e300, hi -1e300, ext 0).
+template <int D>
+void search_bounds(const SearchSet<D>& S, const Kokkos::View<ContactBox<D>>& out) {
+  Kokkos::parallel_reduce("fdem::contact::bounds [device]", Kokkos::RangePolicy<ExecSpace>(0, S.nf), FaceBounds<D>{S},
+                          out);
 }
 
 // Host: grid geometry for a box of face centres, with at most `max_cells` cells (the cell size

@@ -102,40 +102,23 @@ struct LocalSearch {
   SearchSet<D> S;            // x = xb, points = surface nodes, faces = active faces
   CellGrid<D> all, touched;  // the touched grid shares all.geo and all.ncell
   Kokkos::View<int*> tnode, tface;
-  // the union of the touched faces' boxes (touched_reach): an untouched point farther than the
-  // search radius from it along some axis passes no touched face's box test, and skips its query
-  // of the touched grid (most points of a handover: the touched faces are where the crack opened)
+  // the box of the touched faces (search_bounds: their centres' box and largest half extent): an
+  // untouched point farther than that extent and the search radius from it along some axis passes
+  // no touched face's box test, and skips its query of the touched grid (most points of a
+  // handover: the touched faces are where the crack opened)
   Kokkos::View<ContactBox<D>> treach;
 };
 
-// The union of the boxes of the faces of T (face_box at T.x) into reach, on the device (no wait).
-// Empty T: the empty box (lo 1e300, hi -1e300), which holds no point.
-template <int D>
-void touched_reach(const SearchSet<D>& T, const Kokkos::View<ContactBox<D>>& reach) {
-  auto x = T.x;
-  auto fnode = T.fnode;
-  auto faces = T.faces;
-  Kokkos::parallel_reduce(
-      "fdem::contact::touched_reach [device]", Kokkos::RangePolicy<ExecSpace>(0, T.nf),
-      KOKKOS_LAMBDA(const int i, ContactBox<D>& b) {
-        double c[D], e[D];
-        face_box<D>(x, fnode, faces(i), c, e);
-        for (int k = 0; k < D; ++k) {
-          b.lo[k] = c[k] - e[k] < b.lo[k] ? c[k] - e[k] : b.lo[k];
-          b.hi[k] = c[k] + e[k] > b.hi[k] ? c[k] + e[k] : b.hi[k];
-        }
-      },
-      reach);
-}
-
-// Whether point p is out of reach of every touched face: beyond the search radius from their boxes'
-// union along some axis (with a margin of a hundredth of the radius and 1e-12 of the coordinates,
-// far above the rounding of the box test, so that no point that test would take is left out).
+// Whether point p is out of reach of every face of box b: farther than the faces' largest half
+// extent and the search radius from their centres' box along some axis (with a margin of a
+// hundredth of the radius and 1e-12 of the coordinates, far above the rounding of the box test, so
+// that no point that test would take is left out).
 template <int D>
 KOKKOS_INLINE_FUNCTION bool out_of_reach(const ContactBox<D>& b, const double (&p)[D], double radius) {
   bool out = false;
   for (int k = 0; k < D; ++k) {
-    const double m = 1.01 * radius + 1e-12 * (kmath::fabs(p[k]) + kmath::fabs(b.lo[k]) + kmath::fabs(b.hi[k]));
+    const double m =
+        b.ext + 1.01 * radius + 1e-12 * (kmath::fabs(p[k]) + kmath::fabs(b.lo[k]) + kmath::fabs(b.hi[k]));
     out = out || p[k] < b.lo[k] - m || p[k] > b.hi[k] + m;
   }
   return out;

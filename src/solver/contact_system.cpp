@@ -276,8 +276,8 @@ void ContactSystem<D>::update_lists(const Model<D>& m) {
   T.faces = tlist_;
   T.nf = nt;
   grid_bin<D>(tgrid_, T);
-  if (!treach_.is_allocated()) treach_ = Kokkos::View<ContactBox<D>>("fdem::contact::touched_reach");
-  touched_reach<D>(T, treach_);
+  if (!treach_.is_allocated()) treach_ = Kokkos::View<ContactBox<D>>("fdem::contact::touched_bounds");
+  search_bounds<D>(T, treach_);
   L.treach = treach_;
   L.all = grid_;
   L.touched = tgrid_;

@@ -242,7 +242,7 @@ class ContactSystem {
   SurfacesBefore before_;         // surfaces of the lists, at a handover
   Kokkos::View<int*> tnode_, tface_, tlist_;  // touched nodes and faces (list_update.hpp)
   CellGrid<D> tgrid_;                         // grid of the touched faces
-  Kokkos::View<ContactBox<D>> treach_;        // the union of the touched faces' boxes (touched_reach)
+  Kokkos::View<ContactBox<D>> treach_;        // the box of the touched faces (LocalSearch::treach)
   bool may_meet_ = false, need_build_ = true;
   bool friction_before_ = true;  // the last narrow-phase pass computed shear springs
   bool joint_friction_ = false;  // some face has its own friction above 0 (surf_.fmu: a joint's, a residual one)
