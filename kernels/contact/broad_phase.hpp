@@ -270,9 +270,11 @@ struct PairList {
 
 // The faces of the cells around point p (node s) that pass the box test and the filter: counted,
 // and written to out(base + i) when `out` is not empty. Returns the count.
+// The cells' faces and boxes come in their CellGrid (the geometry g apart: the touched grid shares
+// the grid of all faces'), not as Views: CUDA 13.0's cicc crashed (segmentation fault) on this
+// device function with a View<double* [2 * D]> parameter, as on element_depth's plane View.
 template <int D>
-KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<int*>& offset,
-                                      const Kokkos::View<int*>& cfaces, const Kokkos::View<double* [2 * D]>& cbox,
+KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const CellGrid<D>& cells,
                                       const Kokkos::View<double* [D]>& x,
                                       const Kokkos::View<int* [D]>& fnode, const PairFilter<D>& F,
                                       double radius, int s, const double (&p)[D],
@@ -296,14 +298,14 @@ KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const Kokkos::View<in
       r /= span[k];
     }
     for (int k = D - 1; k >= 0; --k) id = id * g.n[k] + c[k];
-    for (int q = offset(id); q < offset(id + 1); ++q) {
+    for (int q = cells.offset(id); q < cells.offset(id + 1); ++q) {
       bool near = true;
       for (int k = 0; k < D; ++k) {
-        const double d = p[k] - cbox(q, k);
-        near = near && (d < 0 ? -d : d) <= cbox(q, D + k) + radius;
+        const double d = p[k] - cells.box(q, k);
+        near = near && (d < 0 ? -d : d) <= cells.box(q, D + k) + radius;
       }
       if (!near) continue;
-      const int f = cfaces(q);
+      const int f = cells.faces(q);
       if (pair_excluded<D>(F, fnode, s, f)) continue;
       if (tol >= 0.0 && !face_within<D>(x, fnode, f, p, radius, tol)) continue;
       if (write) out(base + cnt) = f;
@@ -331,8 +333,7 @@ int candidates_count(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         const int s = set.points(i);
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
-        o(s) = grid_query<D>(grid.geo, grid.offset, grid.faces, grid.box, set.x, set.fnode, Fc, set.radius, s, p,
-                             none, 0, set.tol);
+        o(s) = grid_query<D>(grid.geo, grid, set.x, set.fnode, Fc, set.radius, s, p, none, 0, set.tol);
       });
   int total = 0;
   Kokkos::parallel_scan(
@@ -373,8 +374,7 @@ void candidates_fill(const CellGrid<D>& g, const SearchSet<D>& S, const PairFilt
         double p[D];
         for (int k = 0; k < D; ++k) p[k] = set.x(s, k);
         const int b = o(s);
-        const int cnt = grid_query<D>(grid.geo, grid.offset, grid.faces, grid.box, set.x, set.fnode, Fc, set.radius,
-                                      s, p, pf, b, set.tol);
+        const int cnt = grid_query<D>(grid.geo, grid, set.x, set.fnode, Fc, set.radius, s, p, pf, b, set.tol);
         for (int a = b + 1; a < b + cnt; ++a) {  // insertion sort: segments are short
           const int val = pf(a);
           int c = a - 1;

@@ -143,8 +143,7 @@ KOKKOS_INLINE_FUNCTION int local_pairs(const LocalSearch<D>& L, const PairFilter
   double p[D];
   for (int k = 0; k < D; ++k) p[k] = L.S.x(s, k);
   if (L.tnode(s))
-    return grid_query<D>(L.all.geo, L.all.offset, L.all.faces, L.all.box, L.S.x, L.S.fnode, F, L.S.radius, s, p,
-                         out, base, L.S.tol);
+    return grid_query<D>(L.all.geo, L.all, L.S.x, L.S.fnode, F, L.S.radius, s, p, out, base, L.S.tol);
   const bool write = out.extent(0) > 0;
   int cnt = 0;
   for (int j = old.off(s); j < old.off(s + 1); ++j) {
@@ -154,8 +153,8 @@ KOKKOS_INLINE_FUNCTION int local_pairs(const LocalSearch<D>& L, const PairFilter
     ++cnt;
   }
   if (out_of_reach<D>(L.treach(), p, L.S.radius)) return cnt;
-  return cnt + grid_query<D>(L.all.geo, L.touched.offset, L.touched.faces, L.touched.box, L.S.x, L.S.fnode, F,
-                             L.S.radius, s, p, out, base + cnt, L.S.tol);
+  // (the touched grid's cells in the geometry of the grid of all faces)
+  return cnt + grid_query<D>(L.all.geo, L.touched, L.S.x, L.S.fnode, F, L.S.radius, s, p, out, base + cnt, L.S.tol);
 }
 
 // Counts the pairs of the updated list per surface node into off(node) (others 0) and turns them
