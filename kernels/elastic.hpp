@@ -66,6 +66,46 @@ KOKKOS_INLINE_FUNCTION T element_forces(const T (&x)[D + 1][D], const T (&G)[D][
   return vol0 * w;
 }
 
+// The same forces from the displacement gradient H = F - I (the mixed precision's bulk element,
+// FusedForceKernel::mixed): E = (H + H^T + H^T H) / 2 and P = S + H S, so that a strain far below
+// the rounding of F's unit diagonal keeps its relative precision in floats. T: float or
+// Lanes<W, float>; H is formed in double by the caller.
+template <int D, class T>
+KOKKOS_INLINE_FUNCTION T element_forces_h(const T (&H)[D][D], const T (&G)[D][D], const T& vol0, const T& lambda,
+                                          const T& mu, T (&f)[D + 1][D]) {
+  T E[D][D], S[D][D];
+  T tr = 0.0, ee = 0.0;
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) {
+      T s = H[i][j] + H[j][i];
+      for (int k = 0; k < D; ++k) s += H[k][i] * H[k][j];
+      E[i][j] = 0.5 * s;
+    }
+  for (int i = 0; i < D; ++i) tr += E[i][i];
+  for (int i = 0; i < D; ++i)
+    for (int j = 0; j < D; ++j) {
+      S[i][j] = 2.0 * mu * E[i][j];
+      ee += E[i][j] * E[i][j];
+    }
+  for (int i = 0; i < D; ++i) S[i][i] += lambda * tr;
+  for (int i = 0; i < D; ++i) f[0][i] = 0.0;
+  for (int i = 0; i < D; ++i) {
+    T P[D];
+    for (int j = 0; j < D; ++j) {
+      T s = S[i][j];
+      for (int k = 0; k < D; ++k) s += H[i][k] * S[k][j];
+      P[j] = s;
+    }
+    for (int b = 0; b < D; ++b) {
+      T s = 0.0;
+      for (int j = 0; j < D; ++j) s += P[j] * G[b][j];
+      f[b + 1][i] = -vol0 * s;
+      f[0][i] += vol0 * s;
+    }
+  }
+  return vol0 * (0.5 * lambda * tr * tr + mu * ee);
+}
+
 // Cauchy stress sigma = F S F^T / J as 6 components (xx, yy, zz, xy, yz, xz). In 2D, zz is the
 // plane-strain out-of-plane stress lambda tr(E) (pushed forward), or 0 in plane stress.
 template <int D>

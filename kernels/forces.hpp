@@ -44,21 +44,38 @@ struct BulkForces {
   }
 
 #if FDEM_HOST_LANES
-  // Elements e0 .. e0 + kLanes - 1 at once: the same forces as operator() gives each, to the bit,
-  // scattered element after element as operator() would.
-  template <class Acc>
+  // Elements e0 .. e0 + W - 1 at once (W: the lanes M's width), scattered element after element
+  // as operator() would. M = HostLanes: the same forces as operator() gives each, to the bit.
+  // M = MixedLanes (FusedForceKernel::mixed): positions and the deformation gradient in double,
+  // the displacement gradient H = F - I rounded to floats, the strain, stress and forces in floats
+  // (element_forces_h), the forces added to the double sums.
+  template <class M, class Acc>
   void batch(const int e0, Acc& acc) const {
-    using L = HostLanes;
-    L xe[D + 1][D], G[D][D], fe[D + 1][D];
+    constexpr int W = M::kWidth;
+    using L = Lanes<W>;  // the gather's doubles
+    L xe[D + 1][D], G[D][D];
+    M fe[D + 1][D];
     for (int a = 0; a < D + 1; ++a)
       for (int i = 0; i < D; ++i) xe[a][i] = L::gather([&](int w) { return x(el.elem(e0 + w, a), i); });
     for (int b = 0; b < D; ++b)
       for (int j = 0; j < D; ++j) G[b][j] = L::gather([&](int w) { return el.grad(e0 + w, b, j); });
-    const L vol = L::gather([&](int w) { return el.vol0(e0 + w); });
-    const L lam = L::gather([&](int w) { return el.mat(el.emat(e0 + w), 0); });
-    const L mu = L::gather([&](int w) { return el.mat(el.emat(e0 + w), 1); });
-    element_forces<D, L>(xe, G, vol, lam, mu, fe);
-    for (int w = 0; w < kLanes; ++w)
+    const M vol = M::gather([&](int w) { return el.vol0(e0 + w); });
+    const M lam = M::gather([&](int w) { return el.mat(el.emat(e0 + w), 0); });
+    const M mu = M::gather([&](int w) { return el.mat(el.emat(e0 + w), 1); });
+    if constexpr (std::is_same_v<M, L>) {
+      element_forces<D, L>(xe, G, vol, lam, mu, fe);
+    } else {
+      L F[D][D];
+      M H[D][D], Gm[D][D];
+      deformation_gradient<D, L>(xe, G, F);
+      for (int i = 0; i < D; ++i)
+        for (int j = 0; j < D; ++j) {
+          H[i][j] = lanes_as<M>(i == j ? F[i][j] - L(1.0) : F[i][j]);
+          Gm[i][j] = lanes_as<M>(G[i][j]);
+        }
+      element_forces_h<D, M>(H, Gm, vol, lam, mu, fe);
+    }
+    for (int w = 0; w < W; ++w)
       for (int a = 0; a < D + 1; ++a)
         for (int i = 0; i < D; ++i) acc(el.elem(e0 + w, a), i) += fe[a][i][w];
   }
@@ -142,8 +159,8 @@ struct InterfaceForces {
   }
 
   // The damage D of point k of the lanes' interfaces (cohesive_damage, its quotient in the lanes).
-  static HostLanes lane_damage(const CohesivePoint (&h)[kLanes][D], int k) {
-    using L = HostLanes;
+  template <class L = HostLanes>
+  static L lane_damage(const CohesivePoint (&h)[L::kWidth][D], int k) {
     const L dmax = L::gather([&](int w) { return h[w][k].dmax; });
     const L dm0 = L::gather([&](int w) { return h[w][k].dm0; });
     const L dmf = L::gather([&](int w) { return h[w][k].dmf; });
@@ -158,14 +175,14 @@ struct InterfaceForces {
   // history stays, tn = (dn > 0 ? 1 - D : 1) kn dn and kss = (1 - D) ks, and whether each lane's
   // point keeps its history (fast; ds: |the tangential separation|). Where no lane's point k has
   // initiated (D = 0), tn = kn dn and kss = ks: the same bits, without the damage's quotient.
-  static void lane_tractions(const CohesiveParams (&pw)[kLanes], const CohesivePoint (&h)[kLanes][D], const int k,
-                             const HostLanes& kn, const HostLanes& ks, const HostLanes& dn, const HostLanes& ds,
-                             bool (&fast)[kLanes], HostLanes& tn, HostLanes& kss) {
-    using L = HostLanes;
+  template <class L = HostLanes>
+  static void lane_tractions(const CohesiveParams (&pw)[L::kWidth], const CohesivePoint (&h)[L::kWidth][D],
+                             const int k, const L& kn, const L& ks, const L& dn, const L& ds,
+                             bool (&fast)[L::kWidth], L& tn, L& kss) {
     bool intact = true;
-    for (int w = 0; w < kLanes; ++w) intact = intact && !(fast[w] && h[w][k].dm0 > 0.0);
+    for (int w = 0; w < L::kWidth; ++w) intact = intact && !(fast[w] && h[w][k].dm0 > 0.0);
     if (intact) {
-      for (int w = 0; w < kLanes; ++w)
+      for (int w = 0; w < L::kWidth; ++w)
         if (fast[w]) fast[w] = keeps_history(pw[w], h[w][k], dn[w], ds[w], 0.0);
       tn = kn * dn;
       kss = ks;
@@ -173,8 +190,8 @@ struct InterfaceForces {
     }
     const L dnp = L::gather([&](int w) { return kselect(dn[w] > 0.0, dn[w], 0.0); });
     const L dm = lane_sqrt(dnp * dnp + ds * ds);  // equivalent_separation
-    const L dmg = lane_damage(h, k);
-    for (int w = 0; w < kLanes; ++w)  // (failed: the scalar code sees whether it has come apart)
+    const L dmg = lane_damage<L>(h, k);
+    for (int w = 0; w < L::kWidth; ++w)  // (failed: the scalar code sees whether it has come apart)
       if (fast[w]) fast[w] = dmg[w] < 1.0 && keeps_history(pw[w], h[w][k], dn[w], ds[w], dm[w]);
     const L gl = 1.0 - dmg;
     const L sel = L::gather([&](int w) { return kselect(dn[w] > 0.0, gl[w], 1.0); });
@@ -182,52 +199,68 @@ struct InterfaceForces {
     kss = gl * ks;
   }
 
-  // Interfaces q0 .. q0 + kLanes - 1 at once. Those whose every point keeps its history in this
-  // step take the lanes' forces: an intact point that does not meet its initiation test, or an
-  // initiated one below its largest separation (unloading or reloading: its damage D stays), with
-  // cohesive_update's tractions tn = (dn > 0 ? 1 - D : 1) kn dn and kss = (1 - D) ks; the same
-  // operations as operator() in the same order, so the same bits, and no history written. The
-  // others (initiating, damage growing, failed, handed over, residual friction) go through
-  // operator() in their turn, so that the scatter keeps the interfaces' order.
-  template <class Acc>
+  // Interfaces q0 .. q0 + W - 1 at once (W: the lanes M's width). Those whose every point keeps
+  // its history in this step take the lanes' forces: an intact point that does not meet its
+  // initiation test, or an initiated one below its largest separation (unloading or reloading: its
+  // damage D stays), with cohesive_update's tractions tn = (dn > 0 ? 1 - D : 1) kn dn and
+  // kss = (1 - D) ks, and no history written. The others (initiating, damage growing, failed,
+  // handed over, residual friction) go through operator() in their turn, so that the scatter keeps
+  // the interfaces' order.
+  // M = HostLanes: the same operations as operator() in the same order, so the same bits.
+  // M = MixedLanes (FusedForceKernel::mixed): the lanes in floats, from the separations and the
+  // positions relative to each interface's first A node formed in double (a separation far below
+  // the coordinates' rounding keeps its relative precision); the decisions from the float
+  // separations; the forces added to the double sums.
+  template <class M, class Acc>
   void batch(const int q0, Acc& acc) const {
-    using L = HostLanes;
-    bool fast[kLanes], any = false;
-    CohesiveParams pw[kLanes];
-    CohesivePoint h[kLanes][D];
-    for (int w = 0; w < kLanes; ++w) {
+    constexpr int W = M::kWidth;
+    using L = Lanes<W>;  // the gather's doubles
+    constexpr bool same = std::is_same_v<M, L>;
+    bool fast[W], any = false;
+    CohesiveParams pw[W];
+    CohesivePoint h[W][D];
+    for (int w = 0; w < W; ++w) {
       pw[w] = PerIface ? in.params(q0 + w) : in.coh;
       fast[w] = lane_ready(q0 + w, pw[w], h[w]);
       any = any || fast[w];
     }
     if (!any) {
-      for (int w = 0; w < kLanes; ++w) (*this)(q0 + w, acc);
+      for (int w = 0; w < W; ++w) (*this)(q0 + w, acc);
       return;
     }
-    const L kn = L::gather([&](int w) { return pw[w].kn; });
-    const L ks = L::gather([&](int w) { return pw[w].ks; });
-    const L ap = L::gather([&](int w) { return in.iarea(q0 + w); });
-    L xa[D][D], xb[D][D];
-    for (int k = 0; k < D; ++k)
-      for (int i = 0; i < D; ++i) {
-        xa[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, k), i); });
-        xb[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, D + k), i); });
-      }
-    L n[D], ap_cur, g[D], fa[D][D], fb[D][D];
-    interface_frame<D, L>(xa, xb, L(1.0), n, ap_cur);
+    const M kn = M::gather([&](int w) { return pw[w].kn; });
+    const M ks = M::gather([&](int w) { return pw[w].ks; });
+    const M ap = M::gather([&](int w) { return in.iarea(q0 + w); });
+    M xa[D][D], xb[D][D], d[D][D];
+    {
+      L da[D][D], db[D][D];
+      for (int k = 0; k < D; ++k)
+        for (int i = 0; i < D; ++i) {
+          da[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, k), i); });
+          db[k][i] = L::gather([&](int w) { return x(in.iface(q0 + w, D + k), i); });
+        }
+      for (int k = 0; k < D; ++k)
+        for (int i = 0; i < D; ++i) {
+          d[k][i] = lanes_as<M>(db[k][i] - da[k][i]);
+          xa[k][i] = lanes_as<M>(same ? da[k][i] : da[k][i] - da[0][i]);
+          xb[k][i] = lanes_as<M>(same ? db[k][i] : db[k][i] - da[0][i]);
+        }
+    }
+    M n[D], ap_cur, g[D], fa[D][D], fb[D][D];
+    interface_frame<D, M>(xa, xb, M(1.0), n, ap_cur);
     for (int i = 0; i < D; ++i) g[i] = 0.0;
     for (int k = 0; k < D; ++k) {
-      L d[D], dn, ds[D], ds2;
-      for (int i = 0; i < D; ++i) d[i] = xb[k][i] - xa[k][i];
-      point_separation<D, L>(d, n, dn, ds, ds2);
-      L tn, kss;
-      lane_tractions(pw, h, k, kn, ks, dn, lane_sqrt(ds2), fast, tn, kss);
-      point_forces<D, L>(d, n, ap, tn, kss, dn, ds, fa[k], fb[k], g);
+      M dn, ds[D], ds2;
+      point_separation<D, M>(d[k], n, dn, ds, ds2);
+      M tn, kss;
+      lane_tractions<M>(pw, h, k, kn, ks, dn, lane_sqrt(ds2), fast, tn, kss);
+      point_forces<D, M>(d[k], n, ap, tn, kss, dn, ds, fa[k], fb[k], g);
     }
-    L e[D - 1][D], dm[D][D];
-    mid_edges<D, L>(xa, xb, e);
-    interface_normal_forces<D, L>(e, n, g, dm);
-    for (int w = 0; w < kLanes; ++w) {
+    M e[D - 1][D], dm[D][D];
+    mid_edges<D, M>(xa, xb, e);
+    interface_normal_forces<D, M>(e, n, g, dm);
+    const typename M::Scalar half = 0.5;  // (the forces' last difference in the lanes' precision)
+    for (int w = 0; w < W; ++w) {
       if (!fast[w]) {
         (*this)(q0 + w, acc);
         continue;
@@ -235,8 +268,8 @@ struct InterfaceForces {
       const int q = q0 + w;
       for (int k = 0; k < D; ++k)
         for (int i = 0; i < D; ++i) {
-          acc(in.iface(q, k), i) += fa[k][i][w] - 0.5 * dm[k][i][w];
-          acc(in.iface(q, D + k), i) += fb[k][i][w] - 0.5 * dm[k][i][w];
+          acc(in.iface(q, k), i) += fa[k][i][w] - half * dm[k][i][w];
+          acc(in.iface(q, D + k), i) += fb[k][i][w] - half * dm[k][i][w];
         }
     }
   }
@@ -401,13 +434,16 @@ struct LeanInterfaceForces {
 // Host backends: work item c is element chunk c with the interfaces whose side A lies in it
 // (Model::ichunk: one pass over the nodes, side A's positions and forces are still in cache).
 // lanes: kLanes items at a time (BulkForces::batch, InterfaceForces::batch), the same results to
-// the bit as one at a time (false: the benchmarks' and tests' reference).
+// the bit as one at a time (false: the benchmarks' and tests' reference). mixed (with lanes; case
+// key precision = "mixed", Model::mixed_precision): kMixedLanes items at a time in floats first
+// (batch<MixedLanes>), what a chunk leaves over as with lanes alone.
 template <int D, bool PerIface, bool Fric>
 struct FusedForceKernel {
   BulkForces<D> bulk;
   InterfaceForces<D, PerIface, Fric> iface;
   ForceScatter<D> sf;
   bool lanes = true;
+  bool mixed = false;
 
   KOKKOS_INLINE_FUNCTION void operator()(const int c) const {
     auto acc = sf.access();
@@ -416,13 +452,17 @@ struct FusedForceKernel {
     const int q1 = iface.in.ichunk(c + 1);
     int q = iface.in.ichunk(c);
 #if FDEM_HOST_LANES
+    if (lanes && mixed)
+      for (; e + kMixedLanes <= e1; e += kMixedLanes) bulk.template batch<MixedLanes>(e, acc);
     if (lanes)
-      for (; e + kLanes <= e1; e += kLanes) bulk.batch(e, acc);
+      for (; e + kLanes <= e1; e += kLanes) bulk.template batch<HostLanes>(e, acc);
 #endif
     for (; e < e1; ++e) bulk(e, acc);
 #if FDEM_HOST_LANES
+    if (lanes && mixed)
+      for (; q + kMixedLanes <= q1; q += kMixedLanes) iface.template batch<MixedLanes>(q, acc);
     if (lanes)
-      for (; q + kLanes <= q1; q += kLanes) iface.batch(q, acc);
+      for (; q + kLanes <= q1; q += kLanes) iface.template batch<HostLanes>(q, acc);
 #endif
     for (; q < q1; ++q) iface(q, acc);
   }
@@ -465,7 +505,7 @@ void run_force_kernels(const Model<D>& m, ForceScatter<D>& sf, bool fused, int n
     if (fused) {
       const InterfaceForces<D, PerIface, Fric> iface{m.x, m.v, m.interfaces()};
       Kokkos::parallel_for("fdem::forces", Kokkos::RangePolicy<ExecSpace>(0, nbc),
-                           FusedForceKernel<D, PerIface, Fric>{bulk, iface, sf, lanes});
+                           FusedForceKernel<D, PerIface, Fric>{bulk, iface, sf, lanes, m.mixed_precision});
       return;
     }
   }

@@ -198,6 +198,9 @@ struct PlatenData {
 template <int D>
 struct Model : NodeData<D>, ElementData<D>, InterfaceData<D>, PlatenData<D> {
   static constexpr int dim = D;
+  // case key `precision`: "mixed" (true) computes the force pass's strains, stresses and
+  // interface tractions in floats on host backends (FusedForceKernel::mixed, kernels/forces.hpp)
+  bool mixed_precision = false;
   const NodeData<D>& nodes() const { return *this; }
   const ElementData<D>& elements() const { return *this; }
   const InterfaceData<D>& interfaces() const { return *this; }

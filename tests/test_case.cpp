@@ -479,6 +479,18 @@ TEST(CaseErrors, WrongTypes) {
   EXPECT_HAS(error_of(d), "analysis.plane");
 
   d = base_doc();
+  d["precision"] = "single";
+  msg = error_of(d);
+  EXPECT_HAS(msg, "precision: 'single' is not allowed (allowed: \"double\", \"mixed\")");
+  d = base_doc();
+  d["precision"] = 32;
+  EXPECT_HAS(error_of(d), "precision: expected a string");
+  d = base_doc();
+  EXPECT_FALSE(fdem::parse_case(d, "test.json", {}).mixed_precision);
+  d["precision"] = "mixed";
+  EXPECT_TRUE(fdem::parse_case(d, "test.json", {}).mixed_precision);
+
+  d = base_doc();
   d["mesh"]["generator"] = "rectangel";
   msg = error_of(d);
   EXPECT_HAS(msg, "mesh.generator");

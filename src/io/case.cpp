@@ -51,12 +51,16 @@ Case parse_impl(json doc, const std::string& source, const std::vector<std::stri
 
   R.keys(doc, "", {"name", "description", "dimension", "parameters", "mesh", "analysis",
                    "materials", "regions", "interface_materials", "fracture", "boundary",
-                   "platens", "contact", "damping", "time", "output", "parallel"});
+                   "platens", "contact", "damping", "time", "output", "parallel", "precision"});
   Case c;
   c.file = source;
   c.dim = static_cast<int>(R.integer(doc, "", "dimension", 2, 3));
   c.name = R.name(doc, "", "name", default_name(source));
   if (doc.contains("description")) R.string(doc, "", "description");
+  const std::string precision = R.string(doc, "", "precision", std::string("double"));
+  if (precision != "double" && precision != "mixed")
+    R.fail("precision", "'" + precision + "' is not allowed (allowed: \"double\", \"mixed\")");
+  c.mixed_precision = precision == "mixed";
   read_mesh(doc, c, R, base_dir, check_files);
   read_analysis(doc, c, R);
   read_materials(doc, c, R);

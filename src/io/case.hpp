@@ -120,6 +120,9 @@ struct Case {
   int dim = 2;
   MeshSpec mesh;
   bool plane_stress = false;  // 2D only
+  // precision "mixed": the host force pass's strains, stresses and tractions in floats
+  // (Model::mixed_precision; docs/case-format.md, top level)
+  bool mixed_precision = false;
   double thickness = 1.0;     // 2D only, m
 
   std::vector<BulkMaterial> materials;

@@ -309,6 +309,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
   }
   m.thickness = D == 2 ? c.thickness : 1.0;
   m.plane_stress = D == 2 && c.plane_stress;
+  m.mixed_precision = c.mixed_precision;
 
   const MaterialTable mats = build_materials<D>(c, mesh, m);
   Phase elements("model_elements");

@@ -58,6 +58,11 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   const std::string step_warning = contact_step_warning(sim_.stable, c.safety_factor, c.dt);
   if (writes_ && !began_at_cut() && !step_warning.empty())
     std::fprintf(stderr, "fdem: warning: %s\n", step_warning.c_str());
+  // precision "mixed" has floats only in the host's fused force pass (kernels/forces.hpp)
+  if (writes_ && !began_at_cut() && c.mixed_precision &&
+      !Kokkos::SpaceAccessibility<Kokkos::HostSpace, MemSpace>::accessible)
+    std::fprintf(stderr, "fdem: warning: %s: precision \"mixed\" applies to host backends only; this build's "
+                 "device computes in double\n", c.file.c_str());
   // the whole state of the cut these parts began at is taken: freed (every process received all
   // of it; the next cut gathers a new one)
   if (began_at_cut()) cuts_->state = StateArrays{};
