@@ -4,7 +4,7 @@
 //
 //   bench_step [--dims 2,3] [--sizes 1e4,1e5,1e6] [--reps 5] [--min-time 0.25]
 //              [--triad-doubles 3.2e7] [--skips SIZE | --no-skips] [--no-kernels]
-//              [--json FILE] [--csv FILE]
+//              [--mixed] [--json FILE] [--csv FILE]
 //
 // Meshes: 2D crossed rectangle (4 triangles per cell), 3D box (6 tetrahedra per cell), the cell
 // count chosen so that the element count is at least the requested size; renumbered for locality
@@ -65,6 +65,7 @@ struct Options {
   double triad_doubles = 3.2e7;
   double skip_size = -1;  // < 0: the smallest size; 0: no skip scenes
   bool kernels = true;
+  bool mixed = false;  // also time the full step with precision "mixed" (step_mixed)
   std::string json_file, csv_file;
   std::string command;
 };
@@ -73,7 +74,7 @@ struct Options {
   std::fprintf(stderr,
                "bench_step: %s\nusage: bench_step [--dims 2,3] [--sizes 1e4,1e5,1e6] [--reps 5] "
                "[--min-time 0.25] [--triad-doubles 3.2e7] [--skips SIZE | --no-skips] [--no-kernels] "
-               "[--json FILE] [--csv FILE]\n",
+               "[--mixed] [--json FILE] [--csv FILE]\n",
                msg);
   std::exit(2);
 }
@@ -87,9 +88,10 @@ Options parse(int argc, char** argv) {
     auto val = [&]() { return args.value(); };
     if (a == "-h" || a == "--help") {
       std::printf("bench_step [--dims 2,3] [--sizes 1e4,1e5,1e6] [--reps 5] [--min-time 0.25] "
-                  "[--triad-doubles 3.2e7] [--skips SIZE | --no-skips] [--no-kernels] [--json FILE] [--csv FILE]\n"
+                  "[--triad-doubles 3.2e7] [--skips SIZE | --no-skips] [--no-kernels] [--mixed] [--json FILE] [--csv FILE]\n"
                   "  --sizes: target element counts; --skips: element count of the skip scenes (default: the "
-                  "smallest size)\n  --no-kernels: the full step only; see the comment at the top of "
+                  "smallest size)\n  --no-kernels: the full step only; --mixed: also the full step with precision "
+                  "\"mixed\" (step_mixed),\n  timed in the same rounds; see the comment at the top of "
                   "perf/bench_step.cpp\n");
       std::exit(0);
     } else if (a == "--dims") {
@@ -109,6 +111,8 @@ Options parse(int argc, char** argv) {
       o.skip_size = 0;
     } else if (a == "--no-kernels") {
       o.kernels = false;
+    } else if (a == "--mixed") {
+      o.mixed = true;
     } else if (a == "--json") {
       o.json_file = val();
     } else if (a == "--csv") {
@@ -175,7 +179,7 @@ struct KernelSet {
   Kokkos::View<double* [D]> x0, v0;
   Yardstick<D> ys;
 
-  KernelSet(Simulation<D>& sim, bool kernels)
+  KernelSet(Simulation<D>& sim, bool kernels, bool mixed)
       : sf(sim.m.f), x0("bench_x0", sim.m.nn), v0("bench_v0", sim.m.nn), ys(sim.m, sim.dt) {
     Simulation<D>* s = &sim;
     Model<D>* m = &sim.m;
@@ -184,13 +188,29 @@ struct KernelSet {
     // the yardstick (perf/yardstick.hpp) is timed interleaved with the full step, in every round
     names = {"step", "step_sampled", "yardstick"};
     fns = {[s]() { s->step(false); }, [s]() { s->step(true); }, [y]() { y->step(); }};
+    if (mixed) {  // the full step with precision "mixed" (Model::mixed_precision), interleaved
+      names.push_back("step_mixed");
+      fns.push_back([s]() {
+        s->m.mixed_precision = true;
+        s->step(false);
+        s->m.mixed_precision = false;
+      });
+    }
     if (kernels) {
-      names.insert(names.end(), {"forces", "forces_one_at_a_time", "scatter_reset", "scatter_contribute", "nodes",
+      names.insert(names.end(), {"forces", "forces_one_at_a_time", "forces_mixed", "scatter_reset",
+                                 "scatter_contribute", "nodes",
                                  "nodes_sampled", "strain_energy", "interface_state"});
       fns.push_back([this, m]() { compute_forces<D>(*m, sf); });
       // the host's fused pass without its lanes (FusedForceKernel::lanes): their gain, timed
       // interleaved with the pass that has them
       fns.push_back([this, m]() { compute_forces<D>(*m, sf, true, false); });
+      // the mixed precision's pass (case key precision = "mixed"), timed interleaved
+      fns.push_back([this, m]() {
+        const bool was = m->mixed_precision;
+        m->mixed_precision = true;
+        compute_forces<D>(*m, sf);
+        m->mixed_precision = was;
+      });
       fns.push_back([this]() { sf.reset(); });
       fns.push_back([this, m]() { Kokkos::Experimental::contribute(m->f, sf); });
       fns.push_back([s]() { s->update_nodes_now(false); });
@@ -212,7 +232,8 @@ struct KernelSet {
     before.resize(fns.size());
     after.resize(fns.size());
     for (size_t k = 0; k < names.size(); ++k) {
-      if (names[k] == "forces" || names[k] == "forces_one_at_a_time" || names[k] == "scatter_contribute")
+      if (names[k] == "forces" || names[k] == "forces_one_at_a_time" || names[k] == "forces_mixed" ||
+          names[k] == "scatter_contribute")
         after[k] = [m]() { Kokkos::deep_copy(m->f, 0.0); };
       if (names[k] == "nodes" || names[k] == "nodes_sampled") {
         before[k] = [this, m]() {
@@ -244,6 +265,8 @@ std::vector<Row> make_rows(const std::vector<std::string>& names, const std::vec
   rows.push_back({"step", stat_of("step"), forces_bytes + tr.nodes});
   rows.push_back({"step_sampled", stat_of("step_sampled"), forces_bytes + tr.nodes_sampled + tr.strain + tr.istate});
   rows.push_back({"yardstick", stat_of("yardstick"), yardstick_bytes});
+  if (std::find(names.begin(), names.end(), "step_mixed") != names.end())
+    rows.push_back({"step_mixed", stat_of("step_mixed"), forces_bytes + tr.nodes});
   if (!kernels) return rows;
   rows.push_back({"forces", stat_of("forces"), forces_bytes});
   const Stat r = stat_of("scatter_reset"), q = stat_of("scatter_contribute"), F = stat_of("forces");
@@ -252,6 +275,7 @@ std::vector<Row> make_rows(const std::vector<std::string>& names, const std::vec
   fk.min = fk.max = fk.median;
   rows.push_back({"forces_compute", fk, tr.bulk + tr.iface, true});
   rows.push_back({"forces_one_at_a_time", stat_of("forces_one_at_a_time"), forces_bytes});
+  rows.push_back({"forces_mixed", stat_of("forces_mixed"), forces_bytes});
   rows.push_back({"scatter_reset", r, tr.reset});
   rows.push_back({"scatter_contribute", q, tr.contribute});
   if (contact) rows.push_back({"contact", stat_of("contact"), 0.0});
@@ -314,7 +338,7 @@ json run_size(double target, const Options& o, double triad_gbps) {
   std::fflush(stdout);
 
   ContactSystem<D>* ct = sim.contact();
-  KernelSet<D> ks(sim, o.kernels);
+  KernelSet<D> ks(sim, o.kernels, o.mixed);
   const std::vector<Stat> st = measure(ks.fns, o.reps, o.min_time, ks.after, ks.before);
   const std::vector<Row> rows = make_rows(ks.names, st, tr, ks.ys.bytes(static_cast<int>(c.T)), o.kernels,
                                           ct != nullptr);
@@ -346,6 +370,11 @@ json run_size(double target, const Options& o, double triad_gbps) {
   j["step_sampled_over_yardstick"] = ys_ns > 0 ? rows[1].s.median / ys_ns : 0.0;
   std::printf("  full step / yardstick: %.2f (sampled step: %.2f)\n", j["step_over_yardstick"].get<double>(),
               j["step_sampled_over_yardstick"].get<double>());
+  if (rows.size() > 3 && rows[3].kernel == "step_mixed") {
+    j["step_mixed_over_yardstick"] = ys_ns > 0 ? rows[3].s.median / ys_ns : 0.0;
+    std::printf("  full step with precision \"mixed\" / yardstick: %.2f\n",
+                j["step_mixed_over_yardstick"].get<double>());
+  }
   std::fflush(stdout);
   return j;
 }

@@ -209,7 +209,9 @@ class Report:
         self.w("`forces` = `scatter_reset` + `forces_compute` (bulk and interface passes) + "
                "`scatter_contribute`; `forces_compute` and `sampling_extra` (= sampled step - step) are "
                "differences of medians. `forces_one_at_a_time` is the same pass without its SIMD lanes "
-               "(kernels/lanes.hpp; the same results to the bit), timed interleaved with it. "
+               "(kernels/lanes.hpp; the same results to the bit), timed interleaved with it; `forces_mixed` "
+               "the pass with precision \"mixed\" (the lanes in floats; docs/performance-impact.md, "
+               "\"Mixed precision\"). "
                "`contact` is the contact update of a scene where nothing can meet "
                "(it only checks a flag). `strain_energy`, `interface_state` and `nodes_sampled` run on "
                "sampled (output and check) steps only.")
