@@ -310,11 +310,18 @@ class Report:
                 if big:
                     self.checks.append((f"step/yardstick {dim}D, {t} thread(s)", ratio <= YARDSTICK_LIMIT,
                                         f"{ratio:.2f} x"))
+                mixed = r.get("step_mixed_over_yardstick")
                 rows.append([f"{dim}D", fmt(r["elements"]), str(t), f"{k['step']['ns_per_element_step']:.1f}",
                              f"{k['yardstick']['ns_per_element_step']:.1f}", f"{ratio:.2f}",
-                             f"{r.get('step_sampled_over_yardstick', 0):.2f}"])
+                             f"{r.get('step_sampled_over_yardstick', 0):.2f}",
+                             f"{mixed:.2f}" if mixed else "-"])
         self.w(table(["mesh", "elements", "threads", "step ns/element", "yardstick ns/element", "step / yardstick",
-                      "sampled step / yardstick"], rows))
+                      "sampled step / yardstick", "step with precision \"mixed\" / yardstick"], rows))
+        self.w()
+        self.w("The last column: the case key `precision` = \"mixed\" (floats in the host's force pass; "
+               "`bench_step --mixed` times it in the same rounds; the threads runs of `perf/run_all` pass "
+               "it). The default is \"double\", which the check above takes; `docs/performance-impact.md`, "
+               "\"Mixed precision\", has its error against double and why it is not the default.")
         self.w()
 
     def growth_and_bandwidth(self):
