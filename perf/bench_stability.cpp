@@ -4,7 +4,8 @@
 //   bench_stability limits [STEPS]   computed stable step against the exact limit of the leap-frog
 //                                    (2 / omega_max, eigenvalues of M^-1 K) and the factor at which
 //                                    runs are first stopped (bisection, STEPS per run, default 5000)
-//   bench_stability drift STEPS      free vibration without damping: energy drift over STEPS
+//   bench_stability drift STEPS [mixed]  free vibration without damping: energy drift over STEPS
+//                                    (mixed: the case key precision = "mixed")
 //   bench_stability spin TURNS       free square spinning for TURNS turns: energy, angular
 //                                    momentum, shape
 //   bench_stability impact SPEED     block hitting a rigid wall at SPEED m/s, interfaces breaking:
@@ -206,8 +207,9 @@ void limits(long steps) {
 // Free vibration without damping at the default safety factor 0.5: largest |E/E0 - 1| up to each
 // decade of steps.
 template <int D>
-void drift_row(const char* name, const Case& c, const HostMesh& mesh, long steps) {
+void drift_row(const char* name, Case c, const HostMesh& mesh, long steps, bool mixed) {
   const auto t0 = std::chrono::steady_clock::now();
+  c.mixed_precision = mixed;
   Simulation<D> sim(c, mesh);
   fdem_test::random_velocities(sim, 7, 1.0);
   sim.step(true);
@@ -241,7 +243,8 @@ void drift_row(const char* name, const Case& c, const HostMesh& mesh, long steps
   std::fflush(stdout);
 }
 
-void drift(long steps) {
+void drift(long steps, bool mixed) {
+  if (mixed) std::printf("precision \"mixed\". ");
   std::printf("Free vibration, no damping, no loads, random nodal velocities of up to 1 m/s, "
               "dt = 0.5 dt_crit (the default). Each column: largest |E/E0 - 1| of kinetic + elastic "
               "energy E (sampled every 100 steps) up to that number of steps, and in brackets the "
@@ -254,14 +257,14 @@ void drift(long steps) {
   std::printf("---|\n");
   {
     auto mesh = generate_crossed_rectangle(0, 0, 0.1, 0.1, 3, 3);
-    drift_row<2>("2D crossed 3x3, no interfaces", make_case(2, 0, 0.1 / 3), mesh, steps);
+    drift_row<2>("2D crossed 3x3, no interfaces", make_case(2, 0, 0.1 / 3), mesh, steps, mixed);
     insert_interfaces(mesh, {true});
-    drift_row<2>("2D crossed 3x3, k_n = 10 E/d", make_case(2, 10, 0.1 / 3), mesh, steps);
+    drift_row<2>("2D crossed 3x3, k_n = 10 E/d", make_case(2, 10, 0.1 / 3), mesh, steps, mixed);
   }
   {
     auto mesh = generate_box({0, 0, 0}, {0.1, 0.1, 0.1}, 1, 1, 1);
     insert_interfaces(mesh, {true});
-    drift_row<3>("3D box 1x1x1 (6 tets), k_n = 10 E/d", make_case(3, 10, 0.1), mesh, steps);
+    drift_row<3>("3D box 1x1x1 (6 tets), k_n = 10 E/d", make_case(3, 10, 0.1), mesh, steps, mixed);
   }
 }
 
@@ -387,13 +390,13 @@ int main(int argc, char** argv) {
     if (mode == "limits") {
       limits(arg > 0 ? static_cast<long>(arg) : 5000);
     } else if (mode == "drift") {
-      drift(arg > 0 ? static_cast<long>(arg) : 1000000);
+      drift(arg > 0 ? static_cast<long>(arg) : 1000000, argc > 3 && std::string(argv[3]) == "mixed");
     } else if (mode == "spin") {
       spin(arg > 0 ? arg : 100);
     } else if (mode == "impact") {
       impact(arg > 0 ? arg : 200);
     } else {
-      std::fprintf(stderr, "usage: bench_stability limits [STEPS] | drift [STEPS] | spin [TURNS] | "
+      std::fprintf(stderr, "usage: bench_stability limits [STEPS] | drift [STEPS [mixed]] | spin [TURNS] | "
                            "impact [SPEED]\n");
       return 2;
     }
