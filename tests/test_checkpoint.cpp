@@ -519,6 +519,13 @@ TEST_F(CheckpointRestart, BadRestartInputExits2NamingTheFile) {
                   "another case or mesh: nodes");
   // a longer run is another case too (max_steps is part of it)
   EXPECT_EQ(run_disc(ck, 1, "--set time.max_steps=900 --restart " + ck + "/checkpoint.h5"), 2);
+  // precision: "double" given is the default (the case hash leaves it out, as versions before the
+  // key had it); "mixed" is another case
+  EXPECT_EQ(run_disc(out + "/dbl", 1, "--set time.max_steps=800 --set precision=double --restart " + ck +
+                                          "/checkpoint.h5"),
+            0)
+      << slurp(out + "/dbl.log");
+  expect_rejected(ck + "/checkpoint.h5", "--set time.max_steps=800 --set precision=mixed", "another case");
   // The header's mesh hash is the sum of the rows' hashes (a run whose mesh no process holds sums
   // its parts'); a checkpoint written before 2026-12-07 keeps the hash of then (FNV-1a over the
   // arrays in order) and still restarts; any other hash is another mesh.

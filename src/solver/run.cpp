@@ -135,8 +135,11 @@ namespace {
 // The resolved case without the keys that do not change the results: the checkpoint interval,
 // and the mesh file's path (its content is in the mesh hash; the project folder may move). Taken
 // of the case as read, before resolve_defaults (checkpoints of earlier versions store this hash).
+// The top-level `precision` counts only when it is not the default "double": the resolved case of
+// versions before the key had none, and their checkpoints still restart.
 std::string case_hash(const Case& c) {
   nlohmann::json r = c.resolved;
+  if (r.contains("precision") && r["precision"] == "double") r.erase("precision");
   if (r.contains("output") && r["output"].is_object()) r["output"].erase("checkpoint_every");
   if (r.contains("mesh") && r["mesh"].is_object() && r["mesh"].contains("file")) r["mesh"]["file"] = "";
   const std::string text = r.dump();
