@@ -537,7 +537,7 @@ void compute_forces(const Model<D>& m, ForceScatter<D>& sf, bool contribute = tr
   }
   if (!contribute) return;  // the caller adds more (contact) and contributes
   auto f = m.f;
-  Kokkos::Experimental::contribute(f, sf);
+  contribute_forces<D>(f, sf);
 }
 
 }  // namespace fdem

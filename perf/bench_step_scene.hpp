@@ -27,15 +27,9 @@ using fdem::Simulation;
 
 inline int threads() { return ExecSpace().concurrency(); }
 
-// The force scatter duplicates the force array per thread on host backends (Kokkos' default for
-// OpenMP), and uses atomics on GPUs.
-inline bool scatter_duplicated() {
-#ifdef KOKKOS_ENABLE_OPENMP
-  return std::is_same<ExecSpace, Kokkos::OpenMP>::value;
-#else
-  return false;
-#endif
-}
+// The force scatter keeps a copy of the forces per thread but the first on host backends
+// (kernels/fdem_kokkos.hpp, HostForceScatter), and uses atomics on GPUs.
+inline bool scatter_duplicated() { return fdem::kHostScatter; }
 
 // ---------------------------------------------------------------------------------------------
 // scenes
@@ -121,8 +115,8 @@ struct Counts {
   double nn_elem = 0, nn_iface = 0;  // distinct nodes of the elements, of the interfaces
   double nn_iface_only = 0;          // nodes of interfaces that no element has
   bool fused = false;                // one force pass: elements with their interfaces (Model::ichunk)
-  double T = 1;                      // scatter copies (duplicated scatter: one per thread)
-  bool dup = false;                  // duplicated scatter (reset and contribute passes)
+  double T = 0;                      // scatter copies (host backends: one per thread but the first)
+  bool dup = false;                  // copies to reset and contribute (host backends, 2 threads or more)
   bool handover = false, fext = false;
 };
 
@@ -141,8 +135,8 @@ Counts counts(const HostMesh& mesh, const Simulation<D>& sim) {
     c.nn_iface_only += b[i] && !a[i];
   }
   c.fused = sim.m.ichunk.extent(0) > 0;
-  c.dup = scatter_duplicated();
-  c.T = c.dup ? threads() : 1;
+  c.T = scatter_duplicated() ? threads() - 1 : 0;  // (kernels/fdem_kokkos.hpp, HostForceScatter)
+  c.dup = c.T > 0;
   c.handover = sim.m.icontact.extent(0) > 0;
   c.fext = sim.m.fext.extent(0) > 0;
   return c;

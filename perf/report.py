@@ -164,9 +164,10 @@ class Report:
                "touches counts once (read once, written once, read and written twice), gathered node data "
                "once per pass; the force kernel is one pass over the nodes on host backends (each chunk of "
                "256 elements with the interfaces whose side A lies in it, so side A's node data is read and "
-               "its forces added while in cache; `Model::ichunk`), two (bulk, then interfaces) on GPUs; the duplicated scatter writes T copies of the force array (reset), read-modify-writes "
-               "one copy's worth per pass, and reads T copies plus read-modify-writes the force array "
-               "(contribute). Write-allocate is not counted (as in STREAM): the bandwidths are lower bounds.")
+               "its forces added while in cache; `Model::ichunk`), two (bulk, then interfaces) on GPUs; the host's scatter keeps T = threads - 1 copies of the force array (the first thread adds into the "
+               "array itself: none on one thread; `HostForceScatter`, kernels/fdem_kokkos.hpp), writes them "
+               "(reset), read-modify-writes one copy's worth per pass, and reads the T copies plus "
+               "read-modify-writes the force array (contribute). Write-allocate is not counted (as in STREAM): the bandwidths are lower bounds.")
         self.w()
         rows = []
         for r in s["runs"]:
@@ -291,7 +292,7 @@ class Report:
         self.w()
         self.w("The yardstick (`perf/yardstick.hpp`) is the least physics that does the method's work: "
                "small-strain simplices, a mode-I damage law with one history value per interface point "
-               "written only when it grows, local damping, the same duplicated scatter, chunks, mesh and "
+               "written only when it grows, local damping, the same scatter (`ForceScatter`), chunks, mesh and "
                "memory order. bench_step times it in the same rounds as the full step, so the ratio "
                f"holds whatever the machine's load (target: at most {YARDSTICK_LIMIT} for the intact step "
                "at 1e6 elements, issue 19). Both select rather than branch on the signs of velocities and "

@@ -13,8 +13,8 @@
 //   - nodes: local damping alpha |f| sign(v), leap-frog, no boundary conditions;
 //   - no branch on a sign that changes at random from item to item (damping, the penalty in
 //     compression): selects, as the full step makes them (fdem::kselect);
-//   - the scatter as the full step does it: a duplicated ScatterView on host backends (atomics on
-//     GPUs), one access() per chunk of kChunk elements done with the interfaces whose side A lies
+//   - the scatter as the full step does it (fdem::ForceScatter: a copy per thread but the first on
+//     host backends, atomics on GPUs), one access() per chunk of kChunk elements done with the interfaces whose side A lies
 //     in it (Model::ichunk), then one contribute and a node pass that zeroes the forces.
 // Memory per element-step it must move: u, v, f, 1/m of the nodes, connectivity, gradients and
 // volume of the elements, node pairs, normal, area and damage of the interfaces.
@@ -175,7 +175,7 @@ struct Yardstick {
     const int nic = (ni + fdem::kChunk - 1) / fdem::kChunk;
     sf.reset();
     Kokkos::parallel_for("ys::forces", Kokkos::RangePolicy<fdem::ExecSpace>(0, fused ? nbc : nbc + nic), *this);
-    Kokkos::Experimental::contribute(f, sf);
+    fdem::contribute_forces<D>(f, sf);
     const auto uu = u, vv = v, ff = f;
     const auto mi = minv;
     const double h = dt, al = alpha;
@@ -194,13 +194,14 @@ struct Yardstick {
   }
 
   // Bytes per step it must move (the benchmarks' counting rule: every array element a pass touches
-  // once per pass; node data gathered once per pass). T: scatter copies.
+  // once per pass; node data gathered once per pass). T: scatter copies (threads - 1 on host
+  // backends: the first thread adds into f itself; 0 on GPUs).
   double bytes(int T) const {
     const double nd = 8.0 * D;
     const double forces = nn * nd                                 // u gathered
                           + ne * (4.0 * (D + 1) + 8.0 * D * D + 8)  // connectivity, gradients, volume
                           + ni * (4.0 * 2 * D + nd + 8 + 2 * 8.0 * D);  // pairs, normal, area, damage
-    const double scatter = (T > 1 ? T * nn * nd + T * nn * nd + T * nn * nd + 2 * nn * nd : 0.0);
+    const double scatter = (T > 0 ? T * nn * nd + T * nn * nd + T * nn * nd + 2 * nn * nd : 0.0);
     const double nodes = nn * (2 * nd + 2 * nd + 2 * nd + 8);  // u, v read+write, f read+zero, 1/m
     return forces + scatter + nodes;
   }

@@ -366,7 +366,7 @@ void ContactSystem<D>::update(const Model<D>& m, double dt) {
   own_scatter_.reset();
   update(m, dt, own_scatter_);
   auto f = m.f;
-  Kokkos::Experimental::contribute(f, own_scatter_);
+  contribute_forces<D>(f, own_scatter_);
 }
 
 template <int D>

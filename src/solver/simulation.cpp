@@ -62,12 +62,24 @@ void Simulation<D>::step(bool sample) {
     srf_hist_ = srf_;
   }
   lap(phase_times_.forces);
-  platens_.apply(m, t, dt);
-  lap(phase_times_.platens);
+  // The platens add into m.f directly. Where contact's pass shares the force pass's scatter (one
+  // process), they act after both passes and before the scatter's copies are added: m.f then
+  // holds the first thread's sums, which the platens' forces commute with (kernels/fdem_kokkos.hpp,
+  // ForceScatter); the same sums to the bit as adding them before both.
+  const bool platens_last = contact_ && !force_pass_contributes_;
+  if (!platens_last) {
+    platens_.apply(m, t, dt);
+    lap(phase_times_.platens);
+  }
   if (contact_) {
     parts_.open_ghost_forces(m, scatter_);
     contact_->update(m, dt, scatter_);  // into the force kernel's scatter view, then one contribute
-    Kokkos::Experimental::contribute(m.f, scatter_);
+    if (platens_last) {
+      lap(phase_times_.contact);
+      platens_.apply(m, t, dt);
+      lap(phase_times_.platens);
+    }
+    contribute_forces<D>(m.f, scatter_);
     parts_.return_ghost_forces(m, phase_times_.exchange);
     if (contact_->polled()) agree_on_contact();
     if (stable.contact_pending && surfaces_may_meet()) apply_contact_step();
