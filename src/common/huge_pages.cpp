@@ -1,6 +1,10 @@
 // Transparent huge pages for the heap (huge_pages.hpp): the kernel's mode, glibc's tunable.
 #include "common/huge_pages.hpp"
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -59,6 +63,28 @@ bool ask_for_huge_pages() {
   if (t.find(kTunable) != std::string::npos) return false;  // (the user's choice)
   t += (t.empty() ? "" : ":") + std::string(kTunable) + "=1";
   return setenv("GLIBC_TUNABLES", t.c_str(), 1) == 0;
+}
+
+double release_free_heap() {
+  auto rss = []() {
+    std::ifstream in("/proc/self/status");
+    std::string key;
+    double kb = -1;
+    while (in >> key) {
+      if (key == "VmRSS:") {
+        in >> kb;
+        break;
+      }
+      in.ignore(1 << 12, '\n');
+    }
+    return kb;
+  };
+  const double before = rss();
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
+  const double after = rss();
+  return before >= 0 && after >= 0 ? (before - after) * 1024.0 : -1.0;
 }
 
 }  // namespace fdem

@@ -27,4 +27,10 @@ std::string huge_pages_state();
 // start again for glibc to read it.
 bool ask_for_huge_pages();
 
+// Gives the heap's free memory back to the kernel (glibc's malloc_trim; elsewhere nothing): after
+// the set-up frees its host mesh, whose pages malloc would otherwise keep (resident) for the
+// run's later small allocations, while the large ones (the Views, the contact lists as they grow)
+// take fresh pages. Returns the resident bytes it gave back (-1 where unknown).
+double release_free_heap();
+
 }  // namespace fdem

@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "common/huge_pages.hpp"
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
 #include "solver/stable_step.hpp"
@@ -52,6 +53,11 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
     if (!snaps_) snaps_ = std::make_unique<RunSnapshots<D>>(c, out, *mesh_, nullptr, writes_);
   }
   mesh_.reset();  // about 350 B per tetrahedron with interfaces (docs/performance-impact.md, section 4)
+  {  // its pages, and the set-up's other freed ones, back to the kernel (the run's growth, as its
+     // contact lists', then adds to the Views alone: docs/performance-impact.md, section 4)
+    setup_times::Phase released("heap_released");
+    release_free_heap();
+  }
   progress_ = std::make_unique<Progress>(opt.progress, sim_.step_count, sim_.t);
   announce();
   // quiet or not, on process 0 (a restart says it again)
