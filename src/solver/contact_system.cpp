@@ -359,9 +359,9 @@ void ContactSystem<D>::reserve_pairs(PairList<D>& P, int cap) {
 template <int D>
 void ContactSystem<D>::update(const Model<D>& m, double dt) {
   poll(m);
-  if (own_scatter_size_ != m.f.extent(0)) {
+  if (own_scatter_f_ != m.f.data()) {  // (another model's forces: a scatter of its own)
     own_scatter_ = Scatter(m.f);
-    own_scatter_size_ = m.f.extent(0);
+    own_scatter_f_ = m.f.data();
   }
   own_scatter_.reset();
   update(m, dt, own_scatter_);

@@ -257,7 +257,7 @@ class ContactSystem {
   long builds_ = 0, handed_ = 0, surface_version_ = 0, syncs_ = 0, updates_ = 0, checks_ = 0;
   std::vector<double> potential_area_;
   Scatter own_scatter_;  // update() without a scatter view
-  size_t own_scatter_size_ = 0;
+  const double* own_scatter_f_ = nullptr;  // the forces it adds into (the host scatter's first thread writes them)
   Kokkos::View<ContactSums> pass_;      // sums of the last narrow-phase pass
   Kokkos::View<ContactStatus> status_;  // totals on the device (contact_account)
   ContactStatus read_status() const;
