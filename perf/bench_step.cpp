@@ -356,7 +356,7 @@ json run_size(double target, const Options& o, double triad_gbps) {
   j["contact_may_meet"] = ct ? ct->may_meet() : false;
   j["setup_seconds"] = setup_s;
   const double mb = model_bytes(sim.m);
-  const double sb = scatter_duplicated() ? c.T * c.nn * D * 8.0 : 0.0;
+  const double sb = fdem::kHostScatter ? c.T * c.nn * D * 8.0 : 0.0;
   j["model_bytes"] = mb;
   j["model_bytes_per_element"] = mb / c.ne;
   j["scatter_copies_bytes"] = sb;
@@ -451,7 +451,7 @@ int main(int argc, char** argv) {
   doc["machine"]["OMP_PROC_BIND"] = env("OMP_PROC_BIND");
   doc["machine"]["OMP_PLACES"] = env("OMP_PLACES");
   doc["kokkos_version"] = KOKKOS_VERSION;
-  doc["scatter"] = scatter_duplicated() ? "a copy per thread but the first" : "atomic";
+  doc["scatter"] = fdem::kHostScatter ? "a copy per thread but the first" : "atomic";
   doc["reps"] = o.reps;
   doc["min_time_s"] = o.min_time;
   std::printf("bench_step: %s backend, %d threads, Kokkos %d, %s\n", ExecSpace::name(), threads(), KOKKOS_VERSION,

@@ -27,10 +27,6 @@ using fdem::Simulation;
 
 inline int threads() { return ExecSpace().concurrency(); }
 
-// The force scatter keeps a copy of the forces per thread but the first on host backends
-// (kernels/fdem_kokkos.hpp, HostForceScatter), and uses atomics on GPUs.
-inline bool scatter_duplicated() { return fdem::kHostScatter; }
-
 // ---------------------------------------------------------------------------------------------
 // scenes
 
@@ -135,7 +131,7 @@ Counts counts(const HostMesh& mesh, const Simulation<D>& sim) {
     c.nn_iface_only += b[i] && !a[i];
   }
   c.fused = sim.m.ichunk.extent(0) > 0;
-  c.T = scatter_duplicated() ? threads() - 1 : 0;  // (kernels/fdem_kokkos.hpp, HostForceScatter)
+  c.T = fdem::kHostScatter ? threads() - 1 : 0;  // (kernels/fdem_kokkos.hpp, HostForceScatter)
   c.dup = c.T > 0;
   c.handover = sim.m.icontact.extent(0) > 0;
   c.fext = sim.m.fext.extent(0) > 0;

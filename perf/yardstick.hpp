@@ -14,8 +14,9 @@
 //   - no branch on a sign that changes at random from item to item (damping, the penalty in
 //     compression): selects, as the full step makes them (fdem::kselect);
 //   - the scatter as the full step does it (fdem::ForceScatter: a copy per thread but the first on
-//     host backends, atomics on GPUs), one access() per chunk of kChunk elements done with the interfaces whose side A lies
-//     in it (Model::ichunk), then one contribute and a node pass that zeroes the forces.
+//     host backends, atomics on GPUs), one access() per chunk of kChunk elements done with the
+//     interfaces whose side A lies in it (Model::ichunk), then one contribute and a node pass that
+//     zeroes the forces.
 // Memory per element-step it must move: u, v, f, 1/m of the nodes, connectivity, gradients and
 // volume of the elements, node pairs, normal, area and damage of the interfaces.
 #include <Kokkos_Core.hpp>

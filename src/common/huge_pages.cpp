@@ -1,4 +1,5 @@
-// Transparent huge pages for the heap (huge_pages.hpp): the kernel's mode, glibc's tunable.
+// Transparent huge pages for the heap (huge_pages.hpp): the kernel's mode, glibc's tunable; and
+// the heap's free pages given back.
 #include "common/huge_pages.hpp"
 
 #if defined(__GLIBC__)
@@ -8,6 +9,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <string>
+
+#include "common/setup_times.hpp"
 
 namespace fdem {
 
@@ -66,25 +69,12 @@ bool ask_for_huge_pages() {
 }
 
 double release_free_heap() {
-  auto rss = []() {
-    std::ifstream in("/proc/self/status");
-    std::string key;
-    double kb = -1;
-    while (in >> key) {
-      if (key == "VmRSS:") {
-        in >> kb;
-        break;
-      }
-      in.ignore(1 << 12, '\n');
-    }
-    return kb;
-  };
-  const double before = rss();
+  const double before = setup_times::rss_bytes();
 #if defined(__GLIBC__)
   malloc_trim(0);
 #endif
-  const double after = rss();
-  return before >= 0 && after >= 0 ? (before - after) * 1024.0 : -1.0;
+  const double after = setup_times::rss_bytes();
+  return before >= 0 && after >= 0 ? before - after : -1.0;
 }
 
 }  // namespace fdem
