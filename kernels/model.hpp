@@ -181,16 +181,18 @@ struct InterfaceData {
 
 // Nodes the platens act on (nb of them, ids in bnode): the outer boundary; with contact, every
 // surface node, including the faces of cracks handed over to contact during the run (the contact
-// system's surface nodes, see Platens::follow_surfaces in src/solver/platens.cpp). Their
-// tributary areas (barea) and the platens' shear springs (platen_fs) are indexed by node id.
+// system's surface nodes, see Platens::follow_surfaces in src/solver/platens.cpp; ascending ids).
+// Their tributary areas (barea), the platens' shear springs (platen_fs) and allowances
+// (platen_g0) are rows b of the node bnode(b): sized by the nodes the platens act on, not by every
+// node (a surface is a few per cent of the nodes of a body that is mostly intact).
 template <int D>
 struct PlatenData {
   int nb = 0;
   Kokkos::View<int*> bnode;
-  Kokkos::View<double*> barea;                  // nn
+  Kokkos::View<double*> barea;                  // per row of bnode
   PlatenSet platens;
-  Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, node)
-  Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, node)
+  Kokkos::View<double** [D]> platen_fs;         // shear spring force per (platen, row of bnode)
+  Kokkos::View<double**> platen_g0;             // penetration allowance (<= 0) per (platen, row of bnode)
   Kokkos::View<double* [kPlatenAcc]> platen_acc;
   Kokkos::View<double* [kPlatenMotion]> platen_motion;  // driven platens' travel, speed (kPlatenTravel)
 };

@@ -20,17 +20,17 @@ struct PlatenKernel {
   Kokkos::View<double* [kPlatenMotion]> motion;
   double t, dt;
 
-  // Node i (platen area A) against platen p.
-  KOKKOS_INLINE_FUNCTION void contact(const int p, const int i, const double A) const {
+  // Node i, the b-th of bnode (platen area A), against platen p.
+  KOKKOS_INLINE_FUNCTION void contact(const int p, const int i, const int b, const double A) const {
     const PlatenDev& P = ps.p[p];
     double g = 0;
     for (int k = 0; k < D; ++k) g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, t))) * P.n[k];
     // in front of the platen with no allowance and no shear spring (most nodes at most steps): the
     // path below would write the same zeros and add nothing, so the node is done without its reads
     // and writes
-    if (g >= 0.0 && plus_zero(g0(p, i))) {
+    if (g >= 0.0 && plus_zero(g0(p, b))) {
       bool spring = false;
-      for (int k = 0; k < D; ++k) spring = spring || !plus_zero(fs(p, i, k));
+      for (int k = 0; k < D; ++k) spring = spring || !plus_zero(fs(p, b, k));
       if (!spring) return;
     }
     // relative displacement increment over the last step
@@ -43,14 +43,14 @@ struct PlatenKernel {
     // contact that ends releases its spring's energy and the work of its last half step.
     // gap from the allowance g0 (<= 0, grow_platen_areas), which follows the
     // node out while it is shallower
-    if (g >= g0(p, i)) g0(p, i) = g < 0.0 ? g : 0.0;
-    g -= g0(p, i);
+    if (g >= g0(p, b)) g0(p, b) = g < 0.0 ? g : 0.0;
+    g -= g0(p, b);
     if (g >= 0.0) {
       double f2 = 0, w = 0;
       for (int k = 0; k < D; ++k) {
-        f2 += fs(p, i, k) * fs(p, i, k);
-        w += fs(p, i, k) * du[k];
-        fs(p, i, k) = 0.0;
+        f2 += fs(p, b, k) * fs(p, b, k);
+        w += fs(p, b, k) * du[k];
+        fs(p, b, k) = 0.0;
       }
       if (f2 > 0.0) Kokkos::atomic_add(&acc(p, kPlatenFriction), 0.5 * f2 / (P.ks * A) - 0.5 * w);
       return;
@@ -58,7 +58,7 @@ struct PlatenKernel {
     const double Fn = -P.kn * A * g;
     double fsp[D], fsn = 0;
     for (int k = 0; k < D; ++k) {
-      fsp[k] = fs(p, i, k);
+      fsp[k] = fs(p, b, k);
       fsn += fsp[k] * P.n[k];
     }
     const ShearStep<D> sh = coulomb_shear<D>(P, P.n, A, Fn, fsp, fsn, du, dun);
@@ -67,7 +67,7 @@ struct PlatenKernel {
     double work = 0;
     for (int k = 0; k < D; ++k) {
       const double Fk = Fn * P.n[k] + Fs[k];
-      fs(p, i, k) = Fs[k];
+      fs(p, b, k) = Fs[k];
       f(i, k) += Fk;
       Kokkos::atomic_add(&acc(p, kPlatenForce + k), Fk);
       work += Fk * P.mean_velocity(k, t - 0.5 * dt, dt) * dt;  // centred on x(t)
@@ -79,8 +79,8 @@ struct PlatenKernel {
 
   KOKKOS_INLINE_FUNCTION void operator()(const int b) const {
     const int i = bnode(b);
-    const double A = barea(i);
-    for (int p = 0; p < ps.count; ++p) contact(p, i, A);
+    const double A = barea(b);
+    for (int p = 0; p < ps.count; ++p) contact(p, i, b, A);
   }
 };
 
@@ -154,15 +154,15 @@ double platen_energy(const Model<D>& m, double t) {
       "fdem::platen_energy", Kokkos::RangePolicy<ExecSpace>(0, m.nb),
       KOKKOS_LAMBDA(const int b, double& s) {
         const int i = bnode(b);
-        const double A = barea(i);
+        const double A = barea(b);
         for (int p = 0; p < ps.count; ++p) {
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
             g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, t))) * P.n[k];
-            f2 += fs(p, i, k) * fs(p, i, k);
+            f2 += fs(p, b, k) * fs(p, b, k);
           }
-          g -= g0(p, i);
+          g -= g0(p, b);
           if (g < 0) s += 0.5 * P.kn * A * g * g + 0.5 * f2 / (P.ks * A);
         }
       },
@@ -192,21 +192,52 @@ void grow_platen_areas(const Model<D>& m, const Kokkos::View<double*>& narea, in
   Kokkos::parallel_for(
       "fdem::platen_nodes", Kokkos::RangePolicy<ExecSpace>(0, ns), KOKKOS_LAMBDA(const int b) {
         const int i = bnode(b);
-        const double A0 = barea(i), A1 = 2.0 * na(i);  // contact area: half the node's share
+        const double A0 = barea(b), A1 = 2.0 * na(i);  // contact area: half the node's share
         if (!(A1 > A0)) return;
         for (int p = 0; p < ps.count; ++p) {
           const PlatenDev& P = ps.p[p];
           double g = 0, f2 = 0;
           for (int k = 0; k < D; ++k) {
             g += (x(i, k) - (P.p0[k] + platen_shift(P, motion, p, k, tn))) * P.n[k];
-            f2 += fs(p, i, k) * fs(p, i, k);
+            f2 += fs(p, b, k) * fs(p, b, k);
           }
-          const double ge = g - g0(p, i);
-          if (ge < 0.0) g0(p, i) = g - ge * kmath::sqrt(A0 / A1);
+          const double ge = g - g0(p, b);
+          if (ge < 0.0) g0(p, b) = g - ge * kmath::sqrt(A0 / A1);
           if (f2 > 0.0) Kokkos::atomic_add(&acc(p, kPlatenFriction), 0.5 * f2 * (1.0 / A0 - 1.0 / A1) / P.ks);
         }
-        barea(i) = A1;
+        barea(b) = A1;
       });
+}
+
+// The platens' rows of the nodes of an old list (`from`: its bnode, barea, platen_fs, platen_g0;
+// n rows) into the rows of a new one (`to`, zero where a node is new), at place(i) - 1 for node i
+// (0: not in the new list). Returns the old rows that found no place (0 when the new list holds
+// every node of the old one).
+template <int D>
+int carry_platen_rows(const PlatenData<D>& from, int n, const PlatenData<D>& to, const Kokkos::View<int*>& place_in) {
+  auto bnode = from.bnode;
+  auto place = place_in;
+  auto a0 = from.barea, a1 = to.barea;
+  auto fs0 = from.platen_fs, fs1 = to.platen_fs;
+  auto g00 = from.platen_g0, g01 = to.platen_g0;
+  const int np = from.platens.count, cap = static_cast<int>(to.barea.extent(0));
+  int lost = 0;
+  Kokkos::parallel_reduce(
+      "fdem::platens::carry_rows", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int b, int& l) {
+        const int c = place(bnode(b)) - 1;
+        if (c < 0 || c >= cap) {
+          ++l;
+          return;
+        }
+        a1(c) = a0(b);
+        for (int p = 0; p < np; ++p) {
+          g01(p, c) = g00(p, b);
+          for (int k = 0; k < D; ++k) fs1(p, c, k) = fs0(p, b, k);
+        }
+      },
+      lost);
+  return lost;
 }
 
 }  // namespace fdem

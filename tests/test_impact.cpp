@@ -261,8 +261,6 @@ void fragmenting_impact_with_contact(const std::string& path, const std::vector<
   const double plate = c.platens[0].point[D - 1];
   double worst_err = 0, deepest = 0, beyond = 0;
   auto x = Kokkos::create_mirror_view(sim.m.x);
-  auto g0 = Kokkos::create_mirror_view(sim.m.platen_g0);
-  auto area = Kokkos::create_mirror_view(sim.m.barea);
   for (long n = 1; sim.t < c.end_time * (1 - 1e-12); ++n) {
     const bool sample = n % 100 == 0;
     sim.step(sample);
@@ -270,12 +268,13 @@ void fragmenting_impact_with_contact(const std::string& path, const std::vector<
     sim.check_stability();
     worst_err = std::max(worst_err, std::fabs(sim.energies().balance_error));
     Kokkos::deep_copy(x, sim.m.x);
-    Kokkos::deep_copy(g0, sim.m.platen_g0);
-    Kokkos::deep_copy(area, sim.m.barea);
-    for (int i = 0; i < sim.m.nn; ++i) {
-      deepest = std::max(deepest, plate - x(i, D - 1));
-      if (area(i) > 0) beyond = std::max(beyond, plate - x(i, D - 1) + g0(0, i));
-    }
+    // (the platens' rows: one per node they act on, bnode; they change with the surfaces)
+    auto g0 = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sim.m.platen_g0);
+    auto area = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sim.m.barea);
+    auto bnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), sim.m.bnode);
+    for (int i = 0; i < sim.m.nn; ++i) deepest = std::max(deepest, plate - x(i, D - 1));
+    for (int b = 0; b < sim.m.nb; ++b)
+      if (area(b) > 0) beyond = std::max(beyond, plate - x(bnode(b), D - 1) + g0(0, b));
   }
   FragmentAnalysis<D> fa(sim.m);
   const FragmentStats st = fa.compute(sim.m);

@@ -13,11 +13,10 @@
 namespace fdem {
 
 // The two faces of one interface: node s is a node of the other face of face f's interface
-// (faces nb + 2q and nb + 2q + 1 belong to interface q = fiface(f); -1: outer boundary).
+// (faces nb + 2q and nb + 2q + 1 belong to interface q = face_interface(f, nb)).
 template <int D>
-KOKKOS_INLINE_FUNCTION bool crack_pair(const Kokkos::View<int*>& fiface, int nb, const Kokkos::View<int* [D]>& fnode,
-                                       int s, int f) {
-  const int q = fiface(f);
+KOKKOS_INLINE_FUNCTION bool crack_pair(int nb, const Kokkos::View<int* [D]>& fnode, int s, int f) {
+  const int q = face_interface(f, nb);
   if (q < 0) return false;
   const int other = nb + 2 * q + ((f - nb) % 2 == 0 ? 1 : 0);
   for (int k = 0; k < D; ++k)
@@ -86,8 +85,7 @@ struct PairFilter {
   bool use = false;
   Kokkos::View<int* [D + 1]> elem;
   Kokkos::View<int*> fowner, vgrp, clus;
-  Kokkos::View<int*> fiface;  // interface of each face (-1: outer boundary); faces nb + 2q, nb + 2q + 1
-  int nb = 0;
+  int nb = 0;  // outer boundary faces (then the faces nb + 2q, nb + 2q + 1 of interface q)
 };
 
 template <int D>
@@ -99,7 +97,7 @@ KOKKOS_INLINE_FUNCTION bool pair_excluded(const PairFilter<D>& F, const Kokkos::
   const int e = F.fowner(f);
   for (int a = 0; a < D + 1; ++a)
     if (F.elem(e, a) == s) return true;
-  if (crack_pair<D>(F.fiface, F.nb, fnode, s, f)) return false;
+  if (crack_pair<D>(F.nb, fnode, s, f)) return false;
   const int gs = F.vgrp(s), cs = F.clus(s);
   for (int k = 0; k < D; ++k) {
     const int v = fnode(f, k);

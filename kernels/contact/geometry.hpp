@@ -6,6 +6,11 @@
 
 namespace fdem {
 
+// The interface of contact face f (-1: an outer boundary face): the faces come as the nb outer
+// boundary faces, then the two faces nb + 2q (side A) and nb + 2q + 1 (side B) of each interface q
+// (src/solver/contact_topology.hpp), so it is a number, not a stored one.
+KOKKOS_INLINE_FUNCTION int face_interface(int f, int nb) { return f < nb ? -1 : (f - nb) >> 1; }
+
 // Unit outward normal of a face (nodes in the boundary-face order of mesh.hpp: 2D n = (t_y, -t_x)
 // with t = x1 - x0; 3D n = (x1 - x0) x (x2 - x0)), and its measure (length or area).
 template <int D>

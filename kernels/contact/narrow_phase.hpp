@@ -212,7 +212,7 @@ KOKKOS_INLINE_FUNCTION bool overhangs(const ContactSurface<D>& S, const Kokkos::
                                       const double (&t)[D]) {
   for (int j = S.nfoff(a); j < S.nfoff(a + 1); ++j) {
     const int f = S.nface(j);
-    if (S.fiface(f) >= 0 || !S.factive(f)) continue;
+    if (face_interface(f, S.nb) >= 0 || !S.factive(f)) continue;
     double xf[D][D], n[D], d = 0;
     for (int b = 0; b < D; ++b)
       for (int i = 0; i < D; ++i) xf[b][i] = x(S.fnode(f, b), i);
@@ -257,7 +257,7 @@ KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S,
                                                      const Kokkos::View<double* [D]>& x, int s) {
   HandoverSeed<D> r;
   for (int t = S.nfoff(s); t < S.nfoff(s + 1); ++t) {
-    const int q = S.fiface(S.nface(t));
+    const int q = face_interface(S.nface(t), S.nb);
     if (q < 0 || in.icontact(q) != kHandedNow) continue;
     int k = -1;
     double side = 1.0;  // the force on the node: +F on side A's, -F on side B's

@@ -22,8 +22,8 @@ struct VertexGroups {
 // Surface data the narrow phase needs: face nodes and each node's share of the reference face
 // measure (thickness included), which faces are active, the faces around each node (CSR), each
 // node's contact area (half its share of its active faces: both sides of a contact carry half),
-// the interface of each face (-1: outer boundary; faces nb + 2q and nb + 2q + 1 are the two
-// faces of interface q) and the vertex groups/clusters (see PairFilter).
+// the number of outer boundary faces nb (faces nb + 2q and nb + 2q + 1 are the two faces of
+// interface q: face_interface) and the vertex groups/clusters (see PairFilter).
 template <int D>
 struct ContactSurface {
   Kokkos::View<int* [D + 1]> elem;  // the model's elements
@@ -37,7 +37,6 @@ struct ContactSurface {
   Kokkos::View<int*> factive;
   Kokkos::View<int*> nfoff, nface;
   Kokkos::View<double*> narea;
-  Kokkos::View<int*> fiface;
   // friction coefficient of each face (nf) when some interface is a frictional joint
   // (Model::ifric): the joint's for the faces of its interfaces, -1 (the contact law's) for the
   // others; empty otherwise
@@ -109,13 +108,13 @@ void element_planes(const Kokkos::View<double* [D]>& x, const ContactSurface<D>&
 template <int D>
 double joint_face_friction(const ContactSurface<D>& surf, const Kokkos::View<double*>& ifric_in, int nf) {
   auto fmu = surf.fmu;
-  auto fiface = surf.fiface;
+  const int nb = surf.nb;
   auto ifric = ifric_in;
   double mu_max = 0;
   Kokkos::parallel_reduce(
       "fdem::contact::joint_friction", Kokkos::RangePolicy<ExecSpace>(0, nf),
       KOKKOS_LAMBDA(const int f, double& mx) {
-        const int q = fiface(f);
+        const int q = face_interface(f, nb);
         fmu(f) = q < 0 ? -1.0 : ifric(q);
         mx = fmu(f) > mx ? fmu(f) : mx;
       },
@@ -127,11 +126,11 @@ double joint_face_friction(const ContactSurface<D>& surf, const Kokkos::View<dou
 template <int D>
 void activate_faces(const ContactSurface<D>& surf, const Kokkos::View<int*>& icontact_in, int nf) {
   auto factive = surf.factive;
-  auto fiface = surf.fiface;
+  const int nb = surf.nb;
   auto icontact = icontact_in;
   Kokkos::parallel_for(
       "fdem::contact::factive", Kokkos::RangePolicy<ExecSpace>(0, nf), KOKKOS_LAMBDA(const int f) {
-        const int q = fiface(f);
+        const int q = face_interface(f, nb);
         factive(f) = q < 0 ? 1 : (icontact(q) ? 1 : 0);
       });
 }
@@ -223,6 +222,17 @@ void mark_surface_nodes(const ContactSurface<D>& surf, const Kokkos::View<int*>&
       "fdem::contact::mark_nodes", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
         for (int a = 0; a < D; ++a) Kokkos::atomic_exchange(&mark(fnode(afaces(i), a)), 1);
       });
+}
+
+// mark(list(b)) = b + 1 for the n nodes of `list` (after compact_flagged: the surface nodes, so
+// that mark, still non-zero exactly on them, also gives each node's place in the list;
+// ContactSystem::surface_places).
+inline void number_listed(const Kokkos::View<int*>& mark_in, const Kokkos::View<int*>& list_in, int n) {
+  auto mark = mark_in;
+  auto list = list_in;
+  Kokkos::parallel_for(
+      "fdem::contact::number_surface_nodes", Kokkos::RangePolicy<ExecSpace>(0, n),
+      KOKKOS_LAMBDA(const int b) { mark(list(b)) = b + 1; });
 }
 
 // Free elements (all D + 1 faces active: a fragment that is one element) into surf.efree;

@@ -122,7 +122,6 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   surf_.clus =
       Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::clus"), nn_);
   fill(surf_.clus, [](const auto& h, int i) { h(i) = i; });
-  surf_.fiface = upload_int(F.fiface, "fdem::contact::fiface");
   surf_.nb = F.nb;
   surf_.narea = Kokkos::View<double*>("fdem::contact::narea", nn_);
   groups_.off = upload_int(G.off, "fdem::contact::goff");
@@ -136,7 +135,6 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   surf_.elem = m.elem;
   surf_.fowner = filter_.fowner;
   surf_.efree = Kokkos::View<int*>("fdem::contact::efree", ne_);
-  filter_.fiface = surf_.fiface;
   filter_.nb = F.nb;
   filter_.vgrp = surf_.vgrp;
   filter_.clus = surf_.clus;
@@ -210,6 +208,7 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
     surf_.eplane = Kokkos::View<double* [D + 1][D + 1]>("fdem::contact::eplane", ne_);
   node_areas<D>(surf_, nn_);
   ns_ = compact_flagged("fdem::contact::surface_nodes", mark_, slaves_, nn_);
+  number_listed(mark_, slaves_, ns_);  // (surface_places)
   // a part: its own surface nodes come first (ascending node ids; the own nodes are the first)
   ns_own_ = part_ ? count_below(slaves_, ns_, nown_) : ns_;
   // the narrow phase's ranges of equal work on host backends with several threads (grows with the

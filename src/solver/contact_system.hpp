@@ -40,6 +40,7 @@
 //   rebuild at the next check.
 // The energies and statistics read the status when asked (sampled steps).
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "kernels/contact.hpp"
@@ -165,8 +166,9 @@ class ContactSystem {
   // Changes whenever the surfaces change (active faces, surface nodes, contact areas).
   long surface_version() const { return surface_version_; }
   // Each node's largest possible contact area for rigid platens (its share of every face it can
-  // ever be part of: outer boundary and both faces of interfaces; host).
-  const std::vector<double>& potential_area() const { return potential_area_; }
+  // ever be part of: outer boundary and both faces of interfaces; host), handed over once (the
+  // set-up's platen step needs it; a node's double not held through the run).
+  std::vector<double> take_potential_area() { return std::move(potential_area_); }
   long handed_over() const { return handed_; }
   // Handover checks that found the flag set (the step waits for the device: counts, sizes).
   long handover_checks() const { return checks_; }
@@ -175,6 +177,8 @@ class ContactSystem {
   // Device data (read by tests).
   const PairList<D>& pairs() const { return cur_; }
   const Kokkos::View<int*>& surface_node_list() const { return slaves_; }
+  // Each node's place in surface_node_list() plus one (0: not a surface node; every node id).
+  const Kokkos::View<int*>& surface_places() const { return mark_; }
   const ContactSurface<D>& surface() const { return surf_; }
   const Kokkos::View<double* [D]>& build_positions() const { return xb_; }
 

@@ -116,7 +116,6 @@ ContactFaces contact_faces(const Case& c, const HostMesh& mesh) {
   F.nf = nbf + 2 * ni;
   F.fnode.assign(static_cast<size_t>(F.nf) * D, 0);
   F.fowner.assign(F.nf, -1);
-  F.fiface.assign(F.nf, -1);
   std::vector<int>& fnode = F.fnode;
   std::vector<int>& fowner = F.fowner;
   std::copy(bf.begin(), bf.end(), fnode.begin());
@@ -138,7 +137,6 @@ ContactFaces contact_faces(const Case& c, const HostMesh& mesh) {
       fnode[static_cast<size_t>(fb) * D + 1] = in[D + 2];
       fnode[static_cast<size_t>(fb) * D + 2] = in[D + 1];
     }
-    F.fiface[fa] = F.fiface[fb] = q;
     if (have_owner) {
       fowner[fa] = mesh.iface_elems[2 * static_cast<size_t>(q)];
       fowner[fb] = mesh.iface_elems[2 * static_cast<size_t>(q) + 1];

@@ -13,10 +13,10 @@ namespace fdem {
 
 // Faces: the outer boundary (nb of them), then both faces of each interface: nodes (D per face;
 // the interface's side A in its stored order, side B reversed: both normals point out of their
-// element), owner element, interface (-1 on the outer boundary).
+// element), owner element (the interface of face f: face_interface(f, nb), kernels/contact/geometry.hpp).
 struct ContactFaces {
   int nb = 0, nf = 0;
-  std::vector<int> fnode, fowner, fiface;
+  std::vector<int> fnode, fowner;
 };
 
 // Each face's share of its nodes' areas (measure / D, thickness included), the faces around each

@@ -342,7 +342,7 @@ Simulation<D>::Simulation(const Case& given, const HostMesh& mesh) {
     sc.contact = contact_->stable_step();
     // with contact, the platens act on every surface node, crack faces included: their springs
     // count with each node's largest possible area
-    platens_.contact_step(m, contact_->potential_area(), el.mass, sc);
+    platens_.contact_step(m, contact_->take_potential_area(), el.mass, sc);
     platens_.follow_surfaces(m, *contact_, t);
     sc.may_meet = contact_meet_ = contact_->may_meet();
   }

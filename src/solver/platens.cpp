@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -19,7 +20,7 @@ namespace {
 
 constexpr const char* kAxes[] = {"x", "y", "z"};
 
-// The outer boundary nodes (m.bnode) and their tributary areas (m.barea, per node id).
+// The outer boundary nodes (m.bnode, ascending) and their tributary areas (m.barea, a row each).
 template <int D>
 void boundary_areas(const HostMesh& mesh, Model<D>& m) {
   const auto faces = boundary_faces(mesh);
@@ -48,13 +49,13 @@ void boundary_areas(const HostMesh& mesh, Model<D>& m) {
     for (auto it = area.begin(); it != area.end();) it = it->first >= mesh.owned_nodes ? area.erase(it) : ++it;
   m.nb = static_cast<int>(area.size());
   m.bnode = Kokkos::View<int*>("fdem::bnode", m.nb);
-  m.barea = Kokkos::View<double*>("fdem::barea", m.nn);
+  m.barea = Kokkos::View<double*>("fdem::barea", m.nb);
   auto bn_h = Kokkos::create_mirror_view(m.bnode);
   auto ba_h = Kokkos::create_mirror_view(m.barea);
   int b = 0;
   for (const auto& [node, a] : area) {
     bn_h(b) = node;
-    ba_h(node) = a;
+    ba_h(b) = a;
     ++b;
   }
   Kokkos::deep_copy(m.bnode, bn_h);
@@ -112,17 +113,17 @@ double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, s
     double area = 0;
     for (int bb = 0; bb < m.nb; ++bb) {
       // a node between its spring and a driven platen: the two masses in series
-      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bn_h(bb)) * (1.0 / mass[bn_h(bb)] + P.inv_mass));
+      const double w = std::sqrt(std::max(P.kn, P.ks) * ba_h(bb) * (1.0 / mass[bn_h(bb)] + P.inv_mass));
       step = std::min(step, 2.0 / w);
-      area += ba_h(bn_h(bb));
+      area += ba_h(bb);
     }
     // a driven platen on the springs of the whole boundary at once (a part of a decomposed run:
     // its own share, summed over the parts by Platens::weight_steps)
     kA.push_back(std::max(P.kn, P.ks) * area);
     step = std::min(step, weight_step(kA.back(), P.inv_mass));
   }
-  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nn);
-  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nn);
+  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nb);
+  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nb);
   return step;
 }
 
@@ -219,9 +220,73 @@ void Platens<D>::follow_surfaces(Model<D>& m, const ContactSystem<D>& contact, d
   surface_version_ = contact.surface_version();
   if (m.platens.count == 0) return;
   const int ns = contact.own_surface_nodes();  // (a part: the platens act on its own nodes)
-  m.bnode = contact.surface_node_list();       // its first ns entries
+  PlatenData<D> to;                            // the rows of the new list
+  to.platens = m.platens;
+  to.bnode = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::bnode"), ns);
+  Kokkos::deep_copy(to.bnode, Kokkos::subview(contact.surface_node_list(), std::make_pair(0, ns)));
+  to.barea = Kokkos::View<double*>("fdem::barea", ns);
+  to.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, ns);
+  to.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, ns);
+  to.nb = ns;
+  if (!loaded_.empty()) {  // a checkpoint's rows, per node
+    settle_loaded(to);
+  } else if (const int lost = carry_platen_rows<D>(m, m.nb, to, contact.surface_places()); lost > 0) {
+    throw std::logic_error("platens: " + std::to_string(lost) + " nodes left the contact surfaces");
+  }
+  m.bnode = to.bnode;
+  m.barea = to.barea;
+  m.platen_fs = to.platen_fs;
+  m.platen_g0 = to.platen_g0;
   m.nb = ns;
   grow_platen_areas<D>(m, contact.surface().narea, ns, t);
+}
+
+template <int D>
+std::vector<double> Platens<D>::node_rows(const Model<D>& m, int which) const {
+  const int np = m.platens.count, w = which == kFs ? D : 1;
+  std::vector<double> out(static_cast<size_t>(which == kArea ? 1 : np) * m.nn * w, 0.0);
+  auto bn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.bnode);
+  if (which == kArea) {
+    auto a = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.barea);
+    for (int b = 0; b < m.nb; ++b) out[bn(b)] = a(b);
+  } else if (which == kG0) {
+    auto g = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.platen_g0);
+    for (int p = 0; p < np; ++p)
+      for (int b = 0; b < m.nb; ++b) out[static_cast<size_t>(p) * m.nn + bn(b)] = g(p, b);
+  } else {
+    auto f = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), m.platen_fs);
+    for (int p = 0; p < np; ++p)
+      for (int b = 0; b < m.nb; ++b)
+        for (int k = 0; k < D; ++k) out[(static_cast<size_t>(p) * m.nn + bn(b)) * D + k] = f(p, b, k);
+  }
+  return out;
+}
+
+template <int D>
+void Platens<D>::settle_loaded(PlatenData<D>& to) {
+  if (loaded_.empty()) return;
+  const int np = to.platens.count;
+  const size_t nn = loaded_nn_;
+  auto bn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), to.bnode);
+  auto a = Kokkos::create_mirror_view(to.barea);
+  auto g = Kokkos::create_mirror_view(to.platen_g0);
+  auto f = Kokkos::create_mirror_view(to.platen_fs);
+  Kokkos::deep_copy(a, to.barea);
+  Kokkos::deep_copy(g, to.platen_g0);
+  Kokkos::deep_copy(f, to.platen_fs);
+  const std::vector<double>&area = loaded_[kArea], &g0 = loaded_[kG0], &fs = loaded_[kFs];
+  for (int b = 0; b < to.nb; ++b) {
+    const size_t i = static_cast<size_t>(bn(b));
+    if (!area.empty()) a(b) = area[i];
+    for (int p = 0; p < np; ++p) {
+      if (!g0.empty()) g(p, b) = g0[p * nn + i];
+      for (int k = 0; k < D && !fs.empty(); ++k) f(p, b, k) = fs[(p * nn + i) * D + k];
+    }
+  }
+  Kokkos::deep_copy(to.barea, a);
+  Kokkos::deep_copy(to.platen_g0, g);
+  Kokkos::deep_copy(to.platen_fs, f);
+  loaded_.clear();
 }
 
 template <int D>

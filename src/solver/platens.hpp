@@ -7,6 +7,7 @@
 // the energy, the areas of new surface nodes). Simulation owns one and calls it; nothing else
 // about platens lives in the solver.
 #include <array>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,7 +31,7 @@ class Platens {
   void build(const Case& c, const HostMesh& mesh, const std::vector<double>& mass, Model<D>& m,
              StepContributions& sc);
   // With contact: the springs' stable step on every potential surface node at its largest contact
-  // area (ContactSystem::potential_area) into sc.platens_on_surfaces.
+  // area (ContactSystem::take_potential_area) into sc.platens_on_surfaces.
   void contact_step(const Model<D>& m, const std::vector<double>& amax, const std::vector<double>& mass,
                     StepContributions& sc);
   // With contact: the platens act on the contact system's own surface nodes with their areas (on
@@ -73,16 +74,30 @@ class Platens {
   void append_row(const Model<D>& m, const std::vector<std::array<double, 3>>& forces, double t,
                   std::vector<double>& row) const;
 
-  // Checkpoint entries (one list for save and load: Simulation::checkpoint_fields).
+  // Checkpoint entries (one list for save and load: Simulation::checkpoint_fields). The springs,
+  // allowances and areas are stored per node id (every node, zero where the platens do not act:
+  // the layout of the checkpoints written when they were kept so), whatever list of nodes the
+  // platens act on; loaded, they wait for that list (settle_loaded: follow_surfaces with contact).
   template <class Fields>
   void checkpoint_fields(Fields& f, Model<D>& m) {
-    f.view("model/platen_fs", m.platen_fs);
-    f.view("model/platen_g0", m.platen_g0);
-    f.view("model/platen_area", m.barea, m.barea.extent(0) > 0);
+    const long long np = m.platens.count, nn = m.nn;
+    for (const int which : {kFs, kG0, kArea}) {
+      if (which == kArea && np == 0) continue;  // (no platens: no areas)
+      const long long n = (which == kArea ? 1 : np) * nn * (which == kFs ? D : 1);
+      f.values(kRowNames[which], n, [&] { return node_rows(m, which); },
+               [&, which](const std::vector<double>& a) {
+                 if (np == 0) return;
+                 loaded_[which] = a;
+                 loaded_nn_ = static_cast<size_t>(nn);
+               });
+    }
     f.view("model/platen_acc", m.platen_acc);
     f.view("model/platen_motion", m.platen_motion, driven_);  // (the same on every process)
     cached_at_ = -1;  // (loaded: the next forces() copies)
   }
+  // Loaded rows (checkpoint_fields) into the rows of the list `to` acts on (Simulation::load_state
+  // without contact: m itself; with contact follow_surfaces does it); nothing when none are loaded.
+  void settle_loaded(PlatenData<D>& to);
 
  private:
   std::vector<std::string> names_;
@@ -96,6 +111,14 @@ class Platens {
   mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenAcc]>())) acc_host_;
   mutable decltype(Kokkos::create_mirror_view(Kokkos::View<double* [kPlatenMotion]>())) motion_host_;
   void copy_accumulators(const Model<D>& m, long stamp) const;
+  // The checkpoint's per-node entries: which one (kFs, kG0, kArea), their names, the values of m's
+  // rows spread over every node id (node_rows), and those loaded until settle_loaded takes them
+  // (loaded_nn_: the nodes they were loaded for).
+  enum { kFs = 0, kG0 = 1, kArea = 2 };
+  static constexpr const char* kRowNames[3] = {"model/platen_fs", "model/platen_g0", "model/platen_area"};
+  std::vector<double> node_rows(const Model<D>& m, int which) const;
+  std::map<int, std::vector<double>> loaded_;
+  size_t loaded_nn_ = 0;
 };
 
 extern template class Platens<2>;

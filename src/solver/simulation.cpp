@@ -426,6 +426,7 @@ void Simulation<D>::load_state(const StateArrays& s) {
   StateLoader loader(s);
   checkpoint_fields(loader);
   push_works();
+  if (!contact_) platens_.settle_loaded(m);  // (with contact: follow_surfaces below)
   if (contact_) {
     contact_->load_state(s, m, parts_.node_global());
     platens_.follow_surfaces(m, *contact_, t);
