@@ -6,6 +6,8 @@
 // Surfaces are faces (2D: edges, 3D: triangles) with their outward normal: the outer boundary of
 // every body, and both faces of every failed interface once it is handed over. Every node of an
 // active face is a "surface node".
+#include <algorithm>
+
 #include "kernels/contact/geometry.hpp"
 #include "kernels/interface.hpp"
 
@@ -188,6 +190,23 @@ inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag_in,
       },
       count);
   return count;
+}
+
+// compact_flagged into `out` grown to hold the flagged entries (counted first; grown by half again
+// when it grows, up to n, so that a list of the surfaces is sized by the surfaces that exist, not
+// by every node or face that may become one).
+inline int compact_flagged_grown(const char* label, const Kokkos::View<int*>& flag_in, Kokkos::View<int*>& out,
+                                 int n) {
+  auto flag = flag_in;
+  int count = 0;
+  Kokkos::parallel_reduce(
+      label, Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i, int& c) { c += flag(i) ? 1 : 0; },
+      count);
+  if (static_cast<int>(out.extent(0)) < count) {
+    const long cap = std::min<long>(n, count + count / 2 + 64L);
+    out = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, out.label()), cap);
+  }
+  return compact_flagged(label, flag, out, n);
 }
 
 // How many of the first n entries of an ascending list are below `bound`.

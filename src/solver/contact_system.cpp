@@ -146,8 +146,8 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
 // become active, and a run in which no interface fails never updates its lists.
 template <int D>
 void ContactSystem<D>::allocate_work() {
-  afaces_ = Kokkos::View<int*>("fdem::contact::afaces", nf_);
-  slaves_ = Kokkos::View<int*>("fdem::contact::nodes", nn_);
+  afaces_ = Kokkos::View<int*>("fdem::contact::afaces", 0);  // (sized by refresh_surfaces)
+  slaves_ = Kokkos::View<int*>("fdem::contact::nodes", 0);
   mark_ = Kokkos::View<int*>("fdem::contact::mark", nn_);
   xb_ = Kokkos::View<double* [D]>("fdem::contact::xb", nn_);
   cell_cap_ = std::max<long>(64, 4L * nf_);  // the most cells a grid may have (grid_geometry)
@@ -191,14 +191,14 @@ void ContactSystem<D>::ensure_update_arrays() {
   before_.factive = Kokkos::View<int*>("fdem::contact::factive_before", nf_);
   tnode_ = Kokkos::View<int*>("fdem::contact::tnode", nn_);
   tface_ = Kokkos::View<int*>("fdem::contact::tface", nf_);
-  tlist_ = Kokkos::View<int*>("fdem::contact::tlist", nf_);
+  tlist_ = Kokkos::View<int*>("fdem::contact::tlist", 0);  // (sized by update_lists)
 }
 
 template <int D>
 void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   activate_faces<D>(surf_, m.icontact, nf_);
   update_clusters<D>(groups_, surf_, m.iface, m.icontact);
-  na_ = compact_flagged("fdem::contact::active_faces", surf_.factive, afaces_, nf_);
+  na_ = compact_flagged_grown("fdem::contact::active_faces", surf_.factive, afaces_, nf_);
   if (static_cast<int>(surf_.fgeo.extent(0)) < na_)  // grows with the surfaces (with headroom)
     surf_.fgeo = Kokkos::View<double**>("fdem::contact::fgeo", std::min(nf_, 3 * na_ / 2 + 64), FaceGeo<D>::size);
   face_slots<D>(surf_, afaces_, na_);
@@ -207,7 +207,7 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   if (nfree_ > 0 && surf_.eplane.extent(0) == 0)
     surf_.eplane = Kokkos::View<double* [D + 1][D + 1]>("fdem::contact::eplane", ne_);
   node_areas<D>(surf_, nn_);
-  ns_ = compact_flagged("fdem::contact::surface_nodes", mark_, slaves_, nn_);
+  ns_ = compact_flagged_grown("fdem::contact::surface_nodes", mark_, slaves_, nn_);
   number_listed(mark_, slaves_, ns_);  // (surface_places)
   // a part: its own surface nodes come first (ascending node ids; the own nodes are the first)
   ns_own_ = part_ ? count_below(slaves_, ns_, nown_) : ns_;
@@ -251,7 +251,7 @@ void ContactSystem<D>::update_lists(const Model<D>& m) {
   const double d2 = largest_displacement2<D>(m.x, xb_, slaves_, ns_);
   if (!(d2 <= half * half)) return;
   touched<D>(mark_, surf_, before_, tnode_, tface_, nn_, nf_);
-  const int nt = compact_flagged("fdem::contact::touched_faces_list", tface_, tlist_, nf_);
+  const int nt = compact_flagged_grown("fdem::contact::touched_faces_list", tface_, tlist_, nf_);
   LocalSearch<D> L;
   L.S.x = xb_;
   L.S.points = slaves_;
