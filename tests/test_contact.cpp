@@ -252,7 +252,8 @@ BroadResult broad_phase_run(bool clustered, unsigned seed, int np, int nf, doubl
   S.x = x;
   S.points = points;
   S.np = np;
-  S.fnode = fnode;
+  S.fnode.outer = fnode;  // (every face an outer one)
+  S.fnode.nb = S.fnode.nf = nf;
   S.faces = faces;
   S.nf = nf;
   S.radius = r;

@@ -15,12 +15,13 @@ namespace fdem {
 // The two faces of one interface: node s is a node of the other face of face f's interface
 // (faces nb + 2q and nb + 2q + 1 belong to interface q = face_interface(f, nb)).
 template <int D>
-KOKKOS_INLINE_FUNCTION bool crack_pair(int nb, const Kokkos::View<int* [D]>& fnode, int s, int f) {
+KOKKOS_INLINE_FUNCTION bool crack_pair(int nb, const FaceNodes<D>& fnode, int s, int f) {
   const int q = face_interface(f, nb);
   if (q < 0) return false;
-  const int other = nb + 2 * q + ((f - nb) % 2 == 0 ? 1 : 0);
+  int v[D];
+  fnode.get(nb + 2 * q + ((f - nb) % 2 == 0 ? 1 : 0), v);
   for (int k = 0; k < D; ++k)
-    if (fnode(other, k) == s) return true;
+    if (v[k] == s) return true;
   return false;
 }
 
@@ -63,7 +64,7 @@ struct SearchSet {
   Kokkos::View<double* [D]> x;
   Kokkos::View<int*> points;
   int np = 0;
-  Kokkos::View<int* [D]> fnode;
+  FaceNodes<D> fnode;
   Kokkos::View<int*> faces;
   int nf = 0;
   double radius = 0;
@@ -89,20 +90,20 @@ struct PairFilter {
 };
 
 template <int D>
-KOKKOS_INLINE_FUNCTION bool pair_excluded(const PairFilter<D>& F, const Kokkos::View<int* [D]>& fnode,
+KOKKOS_INLINE_FUNCTION bool pair_excluded(const PairFilter<D>& F, const FaceNodes<D>& fnode,
                                           int s, int f) {
+  int v[D];
+  fnode.get(f, v);
   for (int k = 0; k < D; ++k)
-    if (fnode(f, k) == s) return true;
+    if (v[k] == s) return true;
   if (!F.use) return false;
   const int e = F.fowner(f);
   for (int a = 0; a < D + 1; ++a)
     if (F.elem(e, a) == s) return true;
   if (crack_pair<D>(F.nb, fnode, s, f)) return false;
   const int gs = F.vgrp(s), cs = F.clus(s);
-  for (int k = 0; k < D; ++k) {
-    const int v = fnode(f, k);
-    if (F.vgrp(v) == gs && F.clus(v) == cs) return true;
-  }
+  for (int k = 0; k < D; ++k)
+    if (F.vgrp(v[k]) == gs && F.clus(v[k]) == cs) return true;
   return false;
 }
 
@@ -274,7 +275,7 @@ struct PairList {
 template <int D>
 KOKKOS_INLINE_FUNCTION int grid_query(const GridGeo<D>& g, const CellGrid<D>& cells,
                                       const Kokkos::View<double* [D]>& x,
-                                      const Kokkos::View<int* [D]>& fnode, const PairFilter<D>& F,
+                                      const FaceNodes<D>& fnode, const PairFilter<D>& F,
                                       double radius, int s, const double (&p)[D],
                                       const Kokkos::View<int*>& out, int base, double tol = -1) {
   int ijk[D];

@@ -98,9 +98,11 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
   }
   // relative displacement of the node against the contact point over the last step
   double du[D], du2 = 0;
+  int fv[D];  // the face's nodes
+  S.fnode.get(fc, fv);
   for (int k = 0; k < D; ++k) {
     double vf = 0;
-    for (int q = 0; q < D; ++q) vf += Nc[q] / nsum * v(S.fnode(fc, q), k);
+    for (int q = 0; q < D; ++q) vf += Nc[q] / nsum * v(fv[q], k);
     du[k] = (vs[k] - vf) * dt;
     du2 += du[k] * du[k];
   }
@@ -143,7 +145,7 @@ KOKKOS_INLINE_FUNCTION void contact_pair(const ContactSurface<D>& S, const Conta
   for (int k = 0; k < D; ++k) {
     const double Fk = Fn * n[k] + Fs[k];
     f(s, k) += Fk;
-    for (int q = 0; q < D; ++q) f(S.fnode(fc, q), k) += -Nc[q] * Fk;
+    for (int q = 0; q < D; ++q) f(fv[q], k) += -Nc[q] * Fk;
     if constexpr (Fric) pfs(j, k) = Fs[k];
   }
   pfn(j) = Fn;

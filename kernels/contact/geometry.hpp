@@ -11,6 +11,51 @@ namespace fdem {
 // (src/solver/contact_topology.hpp), so it is a number, not a stored one.
 KOKKOS_INLINE_FUNCTION int face_interface(int f, int nb) { return f < nb ? -1 : (f - nb) >> 1; }
 
+// The nodes of contact face f: fnode(f, a), a < D. The outer boundary faces' are stored (`outer`,
+// nb rows); an interface's two faces take theirs from the interface (Model::iface: side A's D
+// nodes, then side B's): side A in its stored order, side B reversed (2D: its nodes 1, 0; 3D: 0, 2,
+// 1), so that both normals point out of their element (src/solver/contact_topology.cpp). Holding
+// only the outer faces' rows, not one per face that may become a surface, saves D ints for every
+// face of every interface.
+// (face_node_of: the rule on any two such arrays, host mirrors included.)
+template <int D, class Outer, class Iface>
+KOKKOS_INLINE_FUNCTION int face_node_of(const Outer& outer, const Iface& iface, const int nb, const int f,
+                                        const int a) {
+  if (f < nb) return outer(f, a);
+  const int r = f - nb, q = r >> 1, s = r & 1;
+  // side B (s = 1): its node D + 1 - a in 2D, D + (0, 2, 1)[a] in 3D; no branch on the side
+  const int to_b = D == 2 ? (a == 0 ? 3 : 1) : (a == 0 ? 3 : (a == 1 ? 4 : 2));
+  return iface(q, a + s * to_b);
+}
+
+template <int D>
+struct FaceNodes {
+  Kokkos::View<int* [D]> outer;
+  Kokkos::View<int* [2 * D]> iface;
+  int nb = 0, nf = 0;
+  KOKKOS_INLINE_FUNCTION int operator()(const int f, const int a) const {
+    return face_node_of<D>(outer, iface, nb, f, a);
+  }
+  // All D nodes of face f at once (one test of its kind, one row read: the loops that visit every
+  // node of a face).
+  KOKKOS_INLINE_FUNCTION void get(const int f, int (&v)[D]) const {
+    if (f < nb) {
+      for (int a = 0; a < D; ++a) v[a] = outer(f, a);
+      return;
+    }
+    const int r = f - nb, q = r >> 1, s = r & 1;  // (the side without a branch: either is as likely)
+    if constexpr (D == 2) {
+      v[0] = iface(q, 3 * s);
+      v[1] = iface(q, 1 + s);
+    } else {
+      v[0] = iface(q, 3 * s);
+      v[1] = iface(q, 1 + 4 * s);
+      v[2] = iface(q, 2 + 2 * s);
+    }
+  }
+};
+
+
 // Unit outward normal of a face (nodes in the boundary-face order of mesh.hpp: 2D n = (t_y, -t_x)
 // with t = x1 - x0; 3D n = (x1 - x0) x (x2 - x0)), and its measure (length or area).
 template <int D>
@@ -161,13 +206,15 @@ KOKKOS_FORCEINLINE_FUNCTION double face_project_geo(const G& geo, int f, const d
 
 // Centre c and half extent e of the bounding box of face f at positions x.
 template <int D>
-KOKKOS_INLINE_FUNCTION void face_box(const Kokkos::View<double* [D]>& x, const Kokkos::View<int* [D]>& fnode,
+KOKKOS_INLINE_FUNCTION void face_box(const Kokkos::View<double* [D]>& x, const FaceNodes<D>& fnode,
                                      int f, double (&c)[D], double (&e)[D]) {
   double lo[D], hi[D];
-  for (int k = 0; k < D; ++k) lo[k] = hi[k] = x(fnode(f, 0), k);
+  int v[D];
+  fnode.get(f, v);
+  for (int k = 0; k < D; ++k) lo[k] = hi[k] = x(v[0], k);
   for (int a = 1; a < D; ++a)
     for (int k = 0; k < D; ++k) {
-      const double y = x(fnode(f, a), k);
+      const double y = x(v[a], k);
       lo[k] = y < lo[k] ? y : lo[k];
       hi[k] = y > hi[k] ? y : hi[k];
     }
@@ -184,12 +231,14 @@ KOKKOS_INLINE_FUNCTION void face_box(const Kokkos::View<double* [D]>& x, const K
 // barycentric coordinates above -tol (contact_fade), i.e. within dpen + 2 tol L' of the face, and
 // the distance changes by at most the skin while the nodes move. Degenerate faces pass.
 template <int D>
-KOKKOS_INLINE_FUNCTION bool face_within(const Kokkos::View<double* [D]>& x, const Kokkos::View<int* [D]>& fnode,
+KOKKOS_INLINE_FUNCTION bool face_within(const Kokkos::View<double* [D]>& x, const FaceNodes<D>& fnode,
                                         int f, const double (&p)[D], double radius, double tol) {
   double a[D], ab[D], ap[D], L2 = 0, d2 = 0;
+  int v[D];
+  fnode.get(f, v);
   for (int k = 0; k < D; ++k) {
-    a[k] = x(fnode(f, 0), k);
-    ab[k] = x(fnode(f, 1), k) - a[k];
+    a[k] = x(v[0], k);
+    ab[k] = x(v[1], k) - a[k];
     ap[k] = p[k] - a[k];
     L2 += ab[k] * ab[k];
   }
@@ -201,7 +250,7 @@ KOKKOS_INLINE_FUNCTION bool face_within(const Kokkos::View<double* [D]>& x, cons
     // closest point of a triangle (Ericson, Real-Time Collision Detection, 5.1.5)
     double ac[D], bc2 = 0, ac2 = 0;
     for (int k = 0; k < D; ++k) {
-      ac[k] = x(fnode(f, 2), k) - a[k];
+      ac[k] = x(v[2], k) - a[k];
       ac2 += ac[k] * ac[k];
       const double bc = ac[k] - ab[k];
       bc2 += bc * bc;

@@ -97,10 +97,13 @@ KOKKOS_FORCEINLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s
 // node, or copies in one cluster).
 template <int D>
 KOKKOS_FORCEINLINE_FUNCTION bool same_piece(const ContactSurface<D>& S, int fa, int fb) {
+  int on_a[D], on_b[D];
+  S.fnode.get(fa, on_a);
+  S.fnode.get(fb, on_b);
   for (int i = 0; i < D; ++i) {
-    const int va = S.fnode(fa, i);
+    const int va = on_a[i];
     for (int k = 0; k < D; ++k) {
-      const int vb = S.fnode(fb, k);
+      const int vb = on_b[k];
       if (S.vgrp(va) == S.vgrp(vb) && S.clus(va) == S.clus(vb)) return true;
     }
   }
@@ -214,8 +217,10 @@ KOKKOS_INLINE_FUNCTION bool overhangs(const ContactSurface<D>& S, const Kokkos::
     const int f = S.nface(j);
     if (face_interface(f, S.nb) >= 0 || !S.factive(f)) continue;
     double xf[D][D], n[D], d = 0;
+    int v[D];
+    S.fnode.get(f, v);
     for (int b = 0; b < D; ++b)
-      for (int i = 0; i < D; ++i) xf[b][i] = x(S.fnode(f, b), i);
+      for (int i = 0; i < D; ++i) xf[b][i] = x(v[b], i);
     face_normal<D>(xf, n);
     for (int i = 0; i < D; ++i) d += n[i] * t[i];
     if (d > 0.5) return true;
@@ -446,7 +451,11 @@ struct ContactForcesFn {
           last_a = ed.nearest;
         }
         bool mine = last_d > 0.0 && last_d < L.dpen;
-        for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
+        if (mine) {
+          int v[D];
+          S.fnode.get(fc, v);
+          for (int k = 0; k < D && mine; ++k) mine = v[k] != S.elem(own, last_a);
+        }
         if (!mine && !hist) {
           if (All) none(j, g);
           continue;

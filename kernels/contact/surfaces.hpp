@@ -34,7 +34,7 @@ struct ContactSurface {
   // planes of the faces of free elements at the current positions (element_planes): for the
   // face opposite vertex a, the outward unit normal (0..D-1) and its offset n . x (D)
   Kokkos::View<double* [D + 1][D + 1]> eplane;
-  Kokkos::View<int* [D]> fnode;
+  FaceNodes<D> fnode;
   Kokkos::View<double*> fshare;  // measure / D
   Kokkos::View<int*> factive;
   Kokkos::View<int*> nfoff, nface;
@@ -63,8 +63,10 @@ void face_geometry(const Kokkos::View<double* [D]>& x, const ContactSurface<D>& 
       "fdem::contact::face_geometry", Kokkos::RangePolicy<ExecSpace>(0, na), KOKKOS_LAMBDA(const int i) {
         const int f = af(i);
         double xf[D][D];
+        int v[D];
+        fnode.get(f, v);
         for (int a = 0; a < D; ++a)
-          for (int k = 0; k < D; ++k) xf[a][k] = xx(fnode(f, a), k);
+          for (int k = 0; k < D; ++k) xf[a][k] = xx(v[a], k);
         face_geometry_of<D>(xf, geo, i);
       });
 }

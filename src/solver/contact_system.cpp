@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -104,11 +105,16 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
     std::vector<int>().swap(v);
     return d;
   };
-  surf_.fnode =
-      Kokkos::View<int* [D]>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fnode"), nf_);
-  fill(surf_.fnode, [&F](const auto& h, int f) {
+  // (the outer faces' nodes stored, the interfaces' faces' taken from m.iface: FaceNodes)
+  surf_.fnode.outer =
+      Kokkos::View<int* [D]>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fnode"), F.nb);
+  fill(surf_.fnode.outer, [&F](const auto& h, int f) {
     for (int a = 0; a < D; ++a) h(f, a) = F.fnode[static_cast<size_t>(f) * D + a];
   });
+  surf_.fnode.iface = m.iface;
+  surf_.fnode.nb = F.nb;
+  surf_.fnode.nf = nf_;
+  check_face_nodes(F);
   std::vector<int>().swap(F.fnode);
   surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
   surf_.fshare =
@@ -138,6 +144,22 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   filter_.nb = F.nb;
   filter_.vgrp = surf_.vgrp;
   filter_.clus = surf_.clus;
+}
+
+// The faces' nodes as FaceNodes gives them (the interfaces' from the model's) against the
+// topology's table F.fnode: the same for every face, else the model's interfaces are not the
+// mesh's in its order (a logic error, not an input error).
+template <int D>
+void ContactSystem<D>::check_face_nodes(const ContactFaces& F) const {
+  const auto outer = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode.outer);
+  const auto iface = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode.iface);
+  long wrong = 0;
+  host_reduce_sum("fdem::contact::check_face_nodes", nf_, [&](const int f, long& w) {
+    for (int a = 0; a < D; ++a)
+      w += face_node_of<D>(outer, iface, F.nb, f, a) != F.fnode[static_cast<size_t>(f) * D + a];
+  }, wrong);
+  if (wrong > 0)
+    throw std::logic_error("contact: " + std::to_string(wrong) + " face nodes differ from the interfaces' nodes");
 }
 
 // Work arrays: active faces, surface nodes, positions at the last build, pair offsets. The cell

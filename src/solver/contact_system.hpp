@@ -207,6 +207,7 @@ class ContactSystem {
   void set_law(const Case& c, const HostMesh& mesh);
   double contact_stable_step(const std::vector<double>& area, const std::vector<double>& mass) const;
   void upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m);
+  void check_face_nodes(const ContactFaces& F) const;
   void allocate_work();
   void ensure_grid(CellGrid<D>& g, int nfaces, bool touched);
   void ensure_update_arrays();

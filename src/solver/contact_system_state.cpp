@@ -45,17 +45,31 @@ std::unordered_map<long long, int> own_node_index(int nown, const std::vector<in
   return node;
 }
 
+// Every face's nodes on the host, D per face (a copy made when asked).
+template <int D>
+std::vector<int> face_node_table(const FaceNodes<D>& F) {
+  const auto outer = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), F.outer);
+  const auto iface = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), F.iface);
+  std::vector<int> t(static_cast<size_t>(F.nf) * D);
+  for (int f = 0; f < F.nf; ++f)
+    for (int a = 0; a < D; ++a) t[static_cast<size_t>(f) * D + a] = face_node_of<D>(outer, iface, F.nb, f, a);
+  return t;
+}
+
 // Sorted whole-mesh vertex ids -> face.
 template <int D>
 using FaceIndex = std::map<std::array<long long, D>, int>;
 
 template <int D>
-FaceIndex<D> face_index(const Kokkos::View<int* [D]>& faces, const std::vector<int>& ids) {
-  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), faces);
+FaceIndex<D> face_index(const FaceNodes<D>& faces, const std::vector<int>& ids) {
+  const std::vector<int> fnode = face_node_table<D>(faces);
   FaceIndex<D> face_of;
-  for (int f = 0; f < static_cast<int>(fnode.extent(0)); ++f) {
+  for (int f = 0; f < faces.nf; ++f) {
     std::array<long long, D> key;
-    for (int k = 0; k < D; ++k) key[k] = ids.empty() ? fnode(f, k) : ids[static_cast<size_t>(fnode(f, k))];
+    for (int k = 0; k < D; ++k) {
+      const int v = fnode[static_cast<size_t>(f) * D + k];
+      key[k] = ids.empty() ? v : ids[static_cast<size_t>(v)];
+    }
     std::sort(key.begin(), key.end());
     face_of.emplace(key, f);
   }
@@ -172,7 +186,7 @@ std::vector<double> ContactSystem<D>::pair_rows(const std::vector<int>& ids) con
   auto ac = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.ac, used));
   auto g0 = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.g0, used));
   auto fs = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), Kokkos::subview(cur_.fs, used, Kokkos::ALL));
-  auto fnode = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), surf_.fnode);
+  const std::vector<int> fnode = face_node_table<D>(surf_.fnode);
   auto whole = [&ids](int i) { return static_cast<double>(ids.empty() ? i : ids[static_cast<size_t>(i)]); };
   std::vector<double> rows;
   if (off.extent(0) == 0) return rows;  // (no lists yet)
@@ -182,7 +196,7 @@ std::vector<double> ContactSystem<D>::pair_rows(const std::vector<int>& ids) con
       for (int k = 0; k < D; ++k) history = history || fs(j, k) != 0.0;
       if (!history) continue;  // (a pair the search finds again starts from nothing)
       std::array<double, D> key;
-      for (int k = 0; k < D; ++k) key[k] = whole(fnode(face(j), k));
+      for (int k = 0; k < D; ++k) key[k] = whole(fnode[static_cast<size_t>(face(j)) * D + k]);
       std::sort(key.begin(), key.end());
       rows.push_back(whole(i));
       rows.insert(rows.end(), key.begin(), key.end());
