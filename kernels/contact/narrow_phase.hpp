@@ -451,11 +451,7 @@ struct ContactForcesFn {
           last_a = ed.nearest;
         }
         bool mine = last_d > 0.0 && last_d < L.dpen;
-        if (mine) {
-          int v[D];
-          S.fnode.get(fc, v);
-          for (int k = 0; k < D && mine; ++k) mine = v[k] != S.elem(own, last_a);
-        }
+        for (int k = 0; k < D && mine; ++k) mine = S.fnode(fc, k) != S.elem(own, last_a);
         if (!mine && !hist) {
           if (All) none(j, g);
           continue;
