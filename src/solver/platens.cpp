@@ -267,13 +267,11 @@ void Platens<D>::settle_loaded(PlatenData<D>& to) {
   if (loaded_.empty()) return;
   const int np = to.platens.count;
   const size_t nn = loaded_nn_;
-  auto bn = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), to.bnode);
-  auto a = Kokkos::create_mirror_view(to.barea);
-  auto g = Kokkos::create_mirror_view(to.platen_g0);
-  auto f = Kokkos::create_mirror_view(to.platen_fs);
-  Kokkos::deep_copy(a, to.barea);
-  Kokkos::deep_copy(g, to.platen_g0);
-  Kokkos::deep_copy(f, to.platen_fs);
+  const Kokkos::HostSpace host;
+  auto bn = Kokkos::create_mirror_view_and_copy(host, to.bnode);
+  auto a = Kokkos::create_mirror_view_and_copy(host, to.barea);
+  auto g = Kokkos::create_mirror_view_and_copy(host, to.platen_g0);
+  auto f = Kokkos::create_mirror_view_and_copy(host, to.platen_fs);
   const std::vector<double>&area = loaded_[kArea], &g0 = loaded_[kG0], &fs = loaded_[kFs];
   for (int b = 0; b < to.nb; ++b) {
     const size_t i = static_cast<size_t>(bn(b));
