@@ -17,15 +17,19 @@ KOKKOS_INLINE_FUNCTION int face_interface(int f, int nb) { return f < nb ? -1 : 
 // 1), so that both normals point out of their element (src/solver/contact_topology.cpp). Holding
 // only the outer faces' rows, not one per face that may become a surface, saves D ints for every
 // face of every interface.
-// (face_node_of: the rule on any two such arrays, host mirrors included.)
+// (side_b_shift: where side B's a-th face node sits in the interface's row, a + side_b_shift(a);
+// face_node_of: the rule on any two such arrays, host mirrors included.)
+template <int D>
+KOKKOS_INLINE_FUNCTION constexpr int side_b_shift(const int a) {
+  return D == 2 ? (a == 0 ? 3 : 1) : (a == 0 ? 3 : (a == 1 ? 4 : 2));
+}
+
 template <int D, class Outer, class Iface>
 KOKKOS_INLINE_FUNCTION int face_node_of(const Outer& outer, const Iface& iface, const int nb, const int f,
                                         const int a) {
   if (f < nb) return outer(f, a);
-  const int r = f - nb, q = r >> 1, s = r & 1;
-  // side B (s = 1): its node D + 1 - a in 2D, D + (0, 2, 1)[a] in 3D; no branch on the side
-  const int to_b = D == 2 ? (a == 0 ? 3 : 1) : (a == 0 ? 3 : (a == 1 ? 4 : 2));
-  return iface(q, a + s * to_b);
+  const int r = f - nb, q = r >> 1, s = r & 1;  // (no branch on the side: either is as likely)
+  return iface(q, a + s * side_b_shift<D>(a));
 }
 
 template <int D>
@@ -43,15 +47,8 @@ struct FaceNodes {
       for (int a = 0; a < D; ++a) v[a] = outer(f, a);
       return;
     }
-    const int r = f - nb, q = r >> 1, s = r & 1;  // (the side without a branch: either is as likely)
-    if constexpr (D == 2) {
-      v[0] = iface(q, 3 * s);
-      v[1] = iface(q, 1 + s);
-    } else {
-      v[0] = iface(q, 3 * s);
-      v[1] = iface(q, 1 + 4 * s);
-      v[2] = iface(q, 2 + 2 * s);
-    }
+    const int r = f - nb, q = r >> 1, s = r & 1;
+    for (int a = 0; a < D; ++a) v[a] = iface(q, a + s * side_b_shift<D>(a));
   }
 };
 

@@ -62,6 +62,13 @@ void boundary_areas(const HostMesh& mesh, Model<D>& m) {
   Kokkos::deep_copy(m.barea, ba_h);
 }
 
+// Room for the springs and allowances of `rows` nodes of every platen (zero).
+template <int D>
+void allocate_springs(PlatenData<D>& d, int rows) {
+  d.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", d.platens.count, rows);
+  d.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", d.platens.count, rows);
+}
+
 // A platen with a mass (PlatenDev::inv_mass): the velocity across its normal and gravity along it.
 void drive(const PlatenSpec& ps, const Vec3& gravity, PlatenDev& P) {
   P.inv_mass = ps.mass > 0 ? 1.0 / ps.mass : 0.0;
@@ -122,8 +129,7 @@ double platens_of(const Case& c, const std::vector<double>& mass, Model<D>& m, s
     kA.push_back(std::max(P.kn, P.ks) * area);
     step = std::min(step, weight_step(kA.back(), P.inv_mass));
   }
-  m.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, m.nb);
-  m.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, m.nb);
+  allocate_springs<D>(m, m.nb);
   return step;
 }
 
@@ -225,8 +231,7 @@ void Platens<D>::follow_surfaces(Model<D>& m, const ContactSystem<D>& contact, d
   to.bnode = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::bnode"), ns);
   Kokkos::deep_copy(to.bnode, Kokkos::subview(contact.surface_node_list(), std::make_pair(0, ns)));
   to.barea = Kokkos::View<double*>("fdem::barea", ns);
-  to.platen_fs = Kokkos::View<double** [D]>("fdem::platen_fs", m.platens.count, ns);
-  to.platen_g0 = Kokkos::View<double**>("fdem::platen_g0", m.platens.count, ns);
+  allocate_springs<D>(to, ns);
   to.nb = ns;
   if (!loaded_.empty()) {  // a checkpoint's rows, per node
     settle_loaded(to);
