@@ -170,8 +170,8 @@ double platen_energy(const Model<D>& m, double t) {
   return e;
 }
 
-// The platens act on the first ns nodes of m.bnode (the contact surface nodes) with their
-// contact areas narea: a node's platen area grows when faces around it become surfaces (from 0
+// The platens act on the first ns nodes of m.bnode (the contact surface nodes, in the order of
+// their list) with their contact areas narea (by the same places): a node's platen area grows when faces around it become surfaces (from 0
 // for a node of a crack face just handed over). Its stored energy may not grow with it: a node in
 // a platen's penalty zone keeps its normal energy (the allowance g0 takes the rest: a crack face
 // node can be well below the plate when it becomes a surface, having slid there along failed
@@ -192,7 +192,7 @@ void grow_platen_areas(const Model<D>& m, const Kokkos::View<double*>& narea, in
   Kokkos::parallel_for(
       "fdem::platen_nodes", Kokkos::RangePolicy<ExecSpace>(0, ns), KOKKOS_LAMBDA(const int b) {
         const int i = bnode(b);
-        const double A0 = barea(b), A1 = 2.0 * na(i);  // contact area: half the node's share
+        const double A0 = barea(b), A1 = 2.0 * na(b);  // contact area: half the node's share
         if (!(A1 > A0)) return;
         for (int p = 0; p < ps.count; ++p) {
           const PlatenDev& P = ps.p[p];

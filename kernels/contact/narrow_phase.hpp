@@ -375,7 +375,7 @@ struct ContactForcesFn {
       }
       return;
     }
-    const double Anode = S.narea(s);
+    const double Anode = S.narea(i);
     Subset sub;
     sub.b = b;
     sub.e = e;
@@ -390,9 +390,9 @@ struct ContactForcesFn {
     // the seed only now (it is not used before): on GPUs the registers of the passes above stay
     // free of it (docs/cuda.md, "Kernel resources")
     if constexpr (Seed == 2) {  // (written by the pass's seed kernel: PointSeeds)
-      contacts(f, s, sub, SeedRow<D>{&scr.seed(i, 0)}, sums);
+      contacts(f, s, i, sub, SeedRow<D>{&scr.seed(i, 0)}, sums);
     } else {
-      contacts(f, s, sub, seeds() ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{}, sums);
+      contacts(f, s, i, sub, seeds() ? handover_seed<D>(S, in, x, s) : HandoverSeed<D>{}, sums);
     }
   }
 
@@ -577,7 +577,7 @@ struct ContactForcesFn {
   //    its weight's share of F (cut so that the springs store at most us); the seed is released
   //    here and what the contacts take is booked back.
   template <class Force, class SeedT>
-  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, const Subset& sub, const SeedT& seed,
+  KOKKOS_INLINE_FUNCTION void contacts(const Force& f, int s, int i, const Subset& sub, const SeedT& seed,
                                        ContactSums& sums) const {
     sums.dissipated += seed.s_energy();
     // the pairs that release energy (rel > 0: contacts whose weight fell, a few per node), listed
@@ -599,7 +599,7 @@ struct ContactForcesFn {
       const int fc = P.face(j);
       const double w = scr.w(j);
       if (!(w > 0.0) && !(P.fn(j) > 0.0) && !(P.g0(j) < 0.0)) continue;  // as contact_pair: nothing to do
-      const double Anode = S.narea(s);  // (read for each pair, as the position: registers)
+      const double Anode = S.narea(i);  // (read for each pair, as the position: registers)
       double lim = w > 0.0 && !(scr.depth(j) >= 0.0) ? related(sub, fc) / kmath::sqrt(Anode * w) : 0.0;
       if (w > 0.0 && !(scr.depth(j) >= 0.0)) {
         const double seed_lim = seed.limit(L, Anode);
@@ -727,7 +727,7 @@ struct PointSeeds {
   ContactLaw L;
   KOKKOS_INLINE_FUNCTION void operator()(const int i) const {
     const int s = pts(i);
-    SeedRow<D>::store(seed, i, handover_seed<D>(S, in, x, s), L, S.narea(s));
+    SeedRow<D>::store(seed, i, handover_seed<D>(S, in, x, s), L, S.narea(i));
   }
 };
 

@@ -21,10 +21,11 @@ struct VertexGroups {
   int n = 0;
 };
 
-// Surface data the narrow phase needs: face nodes and each node's share of the reference face
-// measure (thickness included), which faces are active, the faces around each node (CSR), each
-// node's contact area (half its share of its active faces: both sides of a contact carry half),
-// the number of outer boundary faces nb (faces nb + 2q and nb + 2q + 1 are the two faces of
+// Surface data the narrow phase needs: face nodes, the reference positions X and the 2D
+// thickness (a face's share of its nodes' areas, face_share), which faces are active, the faces
+// around each node (CSR), each surface node's contact area (half its share of its active faces:
+// both sides of a contact carry half; one row per place in the list of surface nodes), the
+// number of outer boundary faces nb (faces nb + 2q and nb + 2q + 1 are the two faces of
 // interface q: face_interface) and the vertex groups/clusters (see PairFilter).
 template <int D>
 struct ContactSurface {
@@ -35,10 +36,11 @@ struct ContactSurface {
   // face opposite vertex a, the outward unit normal (0..D-1) and its offset n . x (D)
   Kokkos::View<double* [D + 1][D + 1]> eplane;
   FaceNodes<D> fnode;
-  Kokkos::View<double*> fshare;  // measure / D
+  Kokkos::View<double* [D]> X;  // the model's reference positions (Model::X)
+  double thick = 1.0;           // 2D: the thickness; 3D: 1
   Kokkos::View<int*> factive;
   Kokkos::View<int*> nfoff, nface;
-  Kokkos::View<double*> narea;
+  Kokkos::View<double*> narea;  // by place in the list of surface nodes (node_areas)
   // friction coefficient of each face (nf) when some interface is a frictional joint
   // (Model::ifric): the joint's for the faces of its interfaces, -1 (the contact law's) for the
   // others; empty otherwise
@@ -279,21 +281,34 @@ int flag_free_elements(const ContactSurface<D>& surf, const Kokkos::View<int*>& 
   return nfree;
 }
 
-// Contact area of each node (surf.narea): half its share of its active faces, summed per node
-// over its faces in a fixed order (the same sums whatever the threads).
+// Face f's share of each of its nodes' areas: its measure at the reference positions (thickness
+// included) over D; computed where needed rather than stored for every face (the same operations
+// as the set-up's face_shares, solver/contact_topology.cpp: the same bits).
 template <int D>
-void node_areas(const ContactSurface<D>& surf, int nn) {
-  auto narea = surf.narea;
-  auto fshare = surf.fshare;
-  auto factive = surf.factive;
-  auto nfoff = surf.nfoff;
-  auto nface = surf.nface;
+KOKKOS_INLINE_FUNCTION double face_share(const ContactSurface<D>& S, int f) {
+  double xf[D][D], n[D];
+  int v[D];
+  S.fnode.get(f, v);
+  for (int a = 0; a < D; ++a)
+    for (int k = 0; k < D; ++k) xf[a][k] = S.X(v[a], k);
+  const double meas = face_normal<D>(xf, n) * S.thick;
+  return meas / D;
+}
+
+// Contact area of each of the ns surface nodes `nodes` (surf.narea, by place in the list): half
+// its share of its active faces, summed per node over its faces in a fixed order (the same sums
+// whatever the threads).
+template <int D>
+void node_areas(const ContactSurface<D>& surf, const Kokkos::View<int*>& nodes_in, int ns) {
+  const ContactSurface<D> S = surf;
+  auto nodes = nodes_in;
   Kokkos::parallel_for(
-      "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
+      "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, ns), KOKKOS_LAMBDA(const int p) {
+        const int i = nodes(p);
         double a = 0.0;
-        for (int j = nfoff(i); j < nfoff(i + 1); ++j)
-          if (factive(nface(j))) a += 0.5 * fshare(nface(j));
-        narea(i) = a;
+        for (int j = S.nfoff(i); j < S.nfoff(i + 1); ++j)
+          if (S.factive(S.nface(j))) a += 0.5 * face_share<D>(S, S.nface(j));
+        S.narea(p) = a;
       });
 }
 

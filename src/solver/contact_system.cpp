@@ -29,13 +29,14 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
   set_law(c, mesh);
   ContactFaces faces = contact_faces<D>(c, mesh);
   nf_ = faces.nf;
-  FaceShares shares = face_shares<D>(mesh, faces, D == 2 ? c.thickness : 1.0);
+  const double thick = D == 2 ? c.thickness : 1.0;
+  FaceShares shares = face_shares<D>(mesh, faces, thick);
   stable_ = contact_stable_step(shares.area, mass);
   potential_area_ = std::move(shares.area);
   HostVertexGroups groups = vertex_groups<D>(mesh);
   bodies_ = part_ ? mesh.pieces : count_bodies(mesh);  // a part: the whole mesh's
   may_meet_ = bodies_ > 1;
-  upload(faces, shares, groups, m);
+  upload(faces, shares, groups, m, thick);
   allocate_work();
 
   m.contact_handover = true;
@@ -93,7 +94,8 @@ double ContactSystem<D>::contact_stable_step(const std::vector<double>& area,
 // Device copies of the host topology; each host array is freed once copied (the set-up's peak
 // memory holds the device arrays and what is left of the host ones, not both in full).
 template <int D>
-void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m) {
+void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m,
+                              double thick) {
   auto fill = [](auto& d, auto&& at) {       // d(i) = at(i) for every entry, on the host's threads
     auto h = Kokkos::create_mirror_view(d);  // d itself on a host backend
     host_for("fdem::contact::upload", static_cast<int>(h.extent(0)), [&](const int i) { at(h, i); });
@@ -117,10 +119,8 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   check_face_nodes(F);
   std::vector<int>().swap(F.fnode);
   surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
-  surf_.fshare =
-      Kokkos::View<double*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::fshare"), nf_);
-  fill(surf_.fshare, [&H](const auto& h, int f) { h(f) = H.share[f]; });
-  std::vector<double>().swap(H.share);
+  surf_.X = m.X;  // (the faces' shares computed from it: face_share)
+  surf_.thick = thick;
   surf_.factive = Kokkos::View<int*>("fdem::contact::factive", nf_);
   surf_.nfoff = upload_int(H.nfoff, "fdem::contact::nfoff");
   surf_.nface = upload_int(H.nface, "fdem::contact::nface");
@@ -129,7 +129,7 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
       Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, "fdem::contact::clus"), nn_);
   fill(surf_.clus, [](const auto& h, int i) { h(i) = i; });
   surf_.nb = F.nb;
-  surf_.narea = Kokkos::View<double*>("fdem::contact::narea", nn_);
+  surf_.narea = Kokkos::View<double*>("fdem::contact::narea", 0);  // (sized by refresh_surfaces)
   groups_.off = upload_int(G.off, "fdem::contact::goff");
   groups_.ent = upload_int(G.ent, "fdem::contact::gent");
   groups_.copy_off = upload_int(G.copy_off, "fdem::contact::gcopy_off");
@@ -229,9 +229,12 @@ void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
   nfree_ = flag_free_elements<D>(surf_, afaces_, na_, ne_);
   if (nfree_ > 0 && surf_.eplane.extent(0) == 0)
     surf_.eplane = Kokkos::View<double* [D + 1][D + 1]>("fdem::contact::eplane", ne_);
-  node_areas<D>(surf_, nn_);
   ns_ = compact_flagged_grown("fdem::contact::surface_nodes", mark_, slaves_, nn_);
   number_listed(mark_, slaves_, ns_);  // (surface_places)
+  if (static_cast<int>(surf_.narea.extent(0)) < ns_)  // (grows with the surfaces, with headroom)
+    surf_.narea = Kokkos::View<double*>(Kokkos::ViewAllocateWithoutInitializing("fdem::contact::narea"),
+                                        std::min(nn_, 3 * ns_ / 2 + 64));
+  node_areas<D>(surf_, slaves_, ns_);
   // a part: its own surface nodes come first (ascending node ids; the own nodes are the first)
   ns_own_ = part_ ? count_below(slaves_, ns_, nown_) : ns_;
   // the narrow phase's ranges of equal work on host backends with several threads (grows with the

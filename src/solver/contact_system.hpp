@@ -206,7 +206,7 @@ class ContactSystem {
   // contact springs' stable step; device copies of the topology; work arrays.
   void set_law(const Case& c, const HostMesh& mesh);
   double contact_stable_step(const std::vector<double>& area, const std::vector<double>& mass) const;
-  void upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m);
+  void upload(ContactFaces& F, FaceShares& H, HostVertexGroups& G, const Model<D>& m, double thick);
   void check_face_nodes(const ContactFaces& F) const;
   void allocate_work();
   void ensure_grid(CellGrid<D>& g, int nfaces, bool touched);

@@ -1,5 +1,5 @@
 // ContactSystem's checkpoint (solver/contact_system.hpp, save_state and load_state): the pair
-// lists with their history, the build positions, node areas and the counters of the re-check
+// lists with their history, the build positions, node areas (by node id) and the counters of the re-check
 // schedule, under "contact/"; and the pairs with a history in whole-mesh numbering, from which a
 // part of a run over another number of processes (or one process) takes its own.
 #include "solver/contact_system.hpp"
@@ -160,13 +160,35 @@ void upload_saved_pairs(PairList<D>& P, const std::vector<SavedPair>& pairs,
   Kokkos::deep_copy(Kokkos::subview(P.fs, used, Kokkos::ALL), fs);
 }
 
+// The surface nodes' contact areas (narea, by place in the list `nodes` of ns) spread over the nn
+// node ids, 0 off the surfaces: the checkpoint's "contact/node_area", one value per node id as
+// before the areas were kept by place (the checkpoints of either read by the other).
+std::vector<double> areas_by_node(const Kokkos::View<double*>& narea, const Kokkos::View<int*>& nodes, int ns,
+                                  int nn) {
+  std::vector<double> out(nn, 0.0);
+  if (ns == 0) return out;
+  const auto a = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), narea);
+  const auto n = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), nodes);
+  for (int p = 0; p < ns; ++p) out[n(p)] = a(p);
+  return out;
+}
+
+// A checkpoint's areas by node id (`v`, nn values) into the places of the ns surface nodes.
+void areas_from_nodes(const std::vector<double>& v, const Kokkos::View<double*>& narea,
+                      const Kokkos::View<int*>& nodes, int ns) {
+  if (ns == 0) return;
+  auto a = Kokkos::create_mirror_view(narea);
+  const auto n = Kokkos::create_mirror_view_and_copy(Kokkos::HostSpace(), nodes);
+  for (int p = 0; p < ns; ++p) a(p) = v[n(p)];
+  Kokkos::deep_copy(narea, a);
+}
+
 }  // namespace
 
 template <int D>
 template <class Self, class F>
 void ContactSystem<D>::state_fields(Self& self, F&& f) {
   f("contact/xb", self.xb_);
-  f("contact/node_area", self.surf_.narea);
   f("contact/may_meet", self.may_meet_);
   f("contact/need_build", self.need_build_);
   f("contact/since_check", self.since_check_);
@@ -250,6 +272,7 @@ void ContactSystem<D>::save_state(StateArrays& s, const std::vector<int>& ids) c
   s.put_int("contact/pair_count", cur_.size);
   visit_pairs<D>(cur_, save);
   state_fields(*this, save);
+  s.f64["contact/node_area"] = areas_by_node(surf_.narea, slaves_, ns_, nn_);
   const ContactStatus st = read_status();
   s.put("contact/dissipated", st.dissipated);
   s.put_int("contact/active", static_cast<long long>(st.active));
@@ -330,6 +353,9 @@ void ContactSystem<D>::load_state(const StateArrays& s, const Model<D>& m, const
     state_fields(*this, older);
     need_build_ = true;
   }
+  // (the areas refresh_surfaces computed, as the run had them; a checkpoint before they were
+  // checkpointed keeps those)
+  if (s.has("contact/node_area")) areas_from_nodes(s.array("contact/node_area", nn_), surf_.narea, slaves_, ns_);
   // checkpoints from before the local list updates hold build positions of surface nodes only:
   // their next handover rebuilds
   xb_all_ = s.has("contact/xb_all") && s.get_int("contact/xb_all") != 0;

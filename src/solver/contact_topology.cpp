@@ -159,10 +159,8 @@ FaceShares face_shares(const HostMesh& mesh, const ContactFaces& F, double thick
   const int nf = F.nf, nn = mesh.num_nodes();
   const std::vector<int>& fnode = F.fnode;
   FaceShares H;
-  std::vector<double>& share = H.share;
   std::vector<int>& nfcount = H.nfoff;
   std::vector<double>& area = H.area;
-  share.assign(nf, 0.0);
   nfcount.assign(nn + 1, 0);
   area.assign(nn, 0.0);
   for (int f = 0; f < nf; ++f) {
@@ -170,11 +168,11 @@ FaceShares face_shares(const HostMesh& mesh, const ContactFaces& F, double thick
     for (int a = 0; a < D; ++a)
       for (int k = 0; k < D; ++k) xf[a][k] = mesh.X[static_cast<size_t>(fnode[static_cast<size_t>(f) * D + a]) * D + k];
     const double meas = face_normal<D>(xf, n) * thick;
-    share[f] = meas / D;
+    const double share = meas / D;
     for (int a = 0; a < D; ++a) {
       const int i = fnode[static_cast<size_t>(f) * D + a];
       ++nfcount[i + 1];
-      area[i] += share[f];
+      area[i] += share;
     }
   }
   for (int i = 0; i < nn; ++i) nfcount[i + 1] += nfcount[i];

@@ -19,11 +19,10 @@ struct ContactFaces {
   std::vector<int> fnode, fowner;
 };
 
-// Each face's share of its nodes' areas (measure / D, thickness included), the faces around each
-// node (CSR: nface(nfoff(i)) .. nface(nfoff(i + 1) - 1)), and each node's share of every face it
-// can ever be part of.
+// The faces around each node (CSR: nface(nfoff(i)) .. nface(nfoff(i + 1) - 1)), and each node's
+// share of every face it can ever be part of (a face's share of its nodes' areas: its measure over
+// D, thickness included; face_share, kernels/contact/surfaces.hpp, computes the same on the device).
 struct FaceShares {
-  std::vector<double> share;
   std::vector<int> nfoff, nface;
   std::vector<double> area;
 };
