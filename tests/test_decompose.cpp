@@ -22,6 +22,7 @@
 #include "mesh/pieces.hpp"
 #include "parallel/decompose.hpp"
 #include "parallel/partition.hpp"
+#include "solver/kept_mesh.hpp"
 #include "solver/run.hpp"
 #include "solver/simulation.hpp"
 #include "solver_fixtures.hpp"
@@ -413,6 +414,48 @@ TEST(Decompose, PartsBuiltOneAtATimeAreTheSameAsAllAtOnce) {
   EXPECT_EQ(pack_mesh(unpack_mesh(bytes)), bytes);
   std::vector<char> cut(bytes.begin(), bytes.end() - 1);
   EXPECT_THROW(unpack_mesh(cut), InputError);
+}
+
+// A mesh kept in a temporary file field by field (KeptMesh) reads back as pack_mesh's bytes; a
+// part's mesh set aside (PartMeshAside) keeps its counts, names and sets meanwhile and comes back
+// the same; a file cut short is refused.
+TEST(Decompose, MeshKeptInAFileAndPartMeshSetAsideComeBackTheSame) {
+  const HostMesh box = half_fracturable_box();
+  KeptMesh kept("for the test");
+  kept.write(box);
+  EXPECT_EQ(pack_mesh(kept.read()), pack_mesh(box));
+  EXPECT_EQ(pack_mesh(kept.read()), pack_mesh(box));  // (read again: from the start)
+
+  const int parts = 2;
+  std::vector<SubMesh> subs = decompose(box, partition_elements(box, parts, PartitionMethod::Rcb), parts, 0.3);
+  SubMesh& s = subs[1];
+  const std::vector<char> before = pack_submesh(s);
+  const HostMesh m0 = s.mesh;
+  PartMeshAside aside(s);
+  aside.set_aside();
+  EXPECT_TRUE(aside.aside());
+  EXPECT_EQ(s.mesh.num_nodes(), 0);
+  EXPECT_EQ(s.mesh.num_elems(), 0);
+  EXPECT_EQ(s.mesh.num_ifaces(), 0);
+  EXPECT_EQ(s.mesh.owned_nodes, m0.owned_nodes);
+  EXPECT_EQ(s.mesh.owned_elems, m0.owned_elems);
+  EXPECT_EQ(s.mesh.pieces, m0.pieces);
+  EXPECT_EQ(s.mesh.node_sets, m0.node_sets);
+  EXPECT_EQ(s.mesh.region_names, m0.region_names);
+  aside.take_back();
+  EXPECT_FALSE(aside.aside());
+  EXPECT_EQ(pack_submesh(s), before);
+  EXPECT_EQ(pack_mesh(s.mesh), pack_mesh(m0));
+  aside.take_back();  // (not aside: nothing)
+  EXPECT_EQ(pack_submesh(s), before);
+
+  std::FILE* f = std::tmpfile();
+  ASSERT_NE(f, nullptr);
+  const long bytes = write_mesh_file(f, box);
+  EXPECT_EQ(bytes, static_cast<long>(pack_mesh(box).size()));
+  std::rewind(f);
+  EXPECT_THROW(read_mesh_file(f, bytes - 1), InputError);
+  std::fclose(f);
 }
 
 TEST(Decompose, PartsPackedAndUnpackedAreTheSameAndDamageIsRefused) {

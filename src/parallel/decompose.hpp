@@ -32,6 +32,7 @@
 // counted interfaces, then the others (each group in order of its side-A element's local index:
 // the force pass's chunks, where every node has one element). The reductions of a step (energies, counts) run over the first
 // owned_* items (HostMesh::owned_*), so that every item is summed by exactly one part.
+#include <cstdio>
 #include <memory>
 #include <vector>
 
@@ -116,6 +117,11 @@ PartLists unpack_lists(const std::vector<char>& bytes);
 // between the cuts: solver/run_processes.cpp).
 std::vector<char> pack_mesh(const HostMesh& m);
 HostMesh unpack_mesh(const std::vector<char>& bytes);
+// pack_mesh's bytes written to the open file f at its position, without them in memory (a mesh
+// kept aside in a temporary file: solver/kept_mesh.hpp); returns how many, -1 when the file
+// refused them. read_mesh_file reads that many back from f's position (InputError: damaged).
+long write_mesh_file(std::FILE* f, const HostMesh& m);
+HostMesh read_mesh_file(std::FILE* f, long bytes);
 // The same for a run's state (a re-cut sends the whole state to every process).
 std::vector<char> pack_state(const StateArrays& s);
 StateArrays unpack_state(const std::vector<char>& bytes);

@@ -1,9 +1,11 @@
 // A part, or a run's state, as bytes and back (src/parallel/decompose.hpp: pack_submesh,
 // pack_state): what process 0 sends each process of a run over several processes.
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "common/error.hpp"
@@ -13,27 +15,37 @@ namespace fdem {
 
 namespace {
 
+// Where the bytes go: memory (pack_*) or a file (write_mesh_file), in the same order.
+struct ByteSink {
+  std::vector<char> bytes;
+  void write(const char* p, size_t n) { bytes.insert(bytes.end(), p, p + n); }
+};
+struct FileSink {
+  std::FILE* f;
+  bool ok = true;
+  void write(const char* p, size_t n) { ok = ok && (n == 0 || std::fwrite(p, 1, n, f) == n); }
+};
+
 // The byte stream of pack_submesh: plain values, strings, vectors and string-keyed maps of them,
 // in order; a vector of plain values in one piece.
+template <class Sink>
 class Packer {
  public:
-  std::vector<char> bytes;
+  Sink sink;
   template <class T>
   void put(const T& v) {
     static_assert(std::is_trivially_copyable_v<T>, "plain values");
-    const char* p = reinterpret_cast<const char*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
+    sink.write(reinterpret_cast<const char*>(&v), sizeof(T));
   }
   void put(const std::string& v) {
     put(static_cast<long long>(v.size()));
-    bytes.insert(bytes.end(), v.begin(), v.end());
+    sink.write(v.data(), v.size());
   }
   template <class T>
   void put(const std::vector<T>& v) {
     put(static_cast<long long>(v.size()));
     if constexpr (std::is_trivially_copyable_v<T>) {
-      const char* p = reinterpret_cast<const char*>(v.data());
-      bytes.insert(bytes.end(), p, p + v.size() * sizeof(T));
+      sink.write(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
     } else {
       for (const auto& x : v) put(x);
     }
@@ -48,9 +60,34 @@ class Packer {
   }
 };
 
+// Where the bytes come from: memory (unpack_*) or a file (read_mesh_file), with how many are left
+// (so that a damaged count is refused before anything is allocated for it).
+struct ByteSource {
+  const std::vector<char>& b;
+  size_t at = 0;
+  size_t left() const { return b.size() - at; }
+  bool read(void* p, size_t n) {
+    if (n > left()) return false;
+    if (n > 0) std::memcpy(p, b.data() + at, n);  // (an empty vector's data() may be null: no memcpy)
+    at += n;
+    return true;
+  }
+};
+struct FileSource {
+  std::FILE* f;
+  size_t rest;
+  size_t left() const { return rest; }
+  bool read(void* p, size_t n) {
+    if (n > rest || (n > 0 && std::fread(p, 1, n, f) != n)) return false;
+    rest -= n;
+    return true;
+  }
+};
+
+template <class Source>
 class Unpacker {
  public:
-  explicit Unpacker(const std::vector<char>& b) : b_(b) {}
+  explicit Unpacker(Source src) : src_(std::move(src)) {}
   template <class T>
   void get(T& v) {
     static_assert(std::is_trivially_copyable_v<T>, "plain values");
@@ -80,25 +117,21 @@ class Unpacker {
       get(v[k]);
     }
   }
-  bool done() const { return at_ == b_.size(); }
+  bool done() const { return src_.left() == 0; }
 
  private:
   // a count of items of at least `least` bytes each, checked against what is left
   size_t count(size_t least) {
     long long n = 0;
     get(n);
-    if (n < 0 || static_cast<unsigned long long>(n) > (b_.size() - at_) / least)
+    if (n < 0 || static_cast<unsigned long long>(n) > src_.left() / least)
       throw InputError("unpack_submesh: a count beyond the end of the data (damaged)");
     return static_cast<size_t>(n);
   }
   void take(void* p, size_t n) {
-    if (n > b_.size() - at_) throw InputError("unpack_submesh: the data ends early (damaged)");
-    if (n == 0) return;  // (an empty vector's data() may be null: no memcpy)
-    std::memcpy(p, b_.data() + at_, n);
-    at_ += n;
+    if (!src_.read(p, n)) throw InputError("unpack_submesh: the data ends early (damaged)");
   }
-  const std::vector<char>& b_;
-  size_t at_ = 0;
+  Source src_;
 };
 
 // Both directions over one list of the fields (f: Packer::put or Unpacker::get).
@@ -151,18 +184,23 @@ void submesh_fields(S& s, F&& f) {
 // unpacking throws InputError naming `what` when the bytes do not unpack exactly.
 template <class T, class Fields>
 std::vector<char> pack_fields(const T& x, Fields&& fields) {
-  Packer p;
+  Packer<ByteSink> p;
   fields(x, [&](const auto& v) { p.put(v); });
-  return std::move(p.bytes);
+  return std::move(p.sink.bytes);
+}
+
+template <class T, class Source, class Fields>
+T unpack_from(Source src, Fields&& fields, const char* what) {
+  T x;
+  Unpacker<Source> u(std::move(src));
+  fields(x, [&](auto& v) { u.get(v); });
+  if (!u.done()) throw InputError(std::string(what) + ": data left over (damaged)");
+  return x;
 }
 
 template <class T, class Fields>
 T unpack_fields(const std::vector<char>& bytes, Fields&& fields, const char* what) {
-  T x;
-  Unpacker u(bytes);
-  fields(x, [&](auto& v) { u.get(v); });
-  if (!u.done()) throw InputError(std::string(what) + ": data left over (damaged)");
-  return x;
+  return unpack_from<T>(ByteSource{bytes}, fields, what);
 }
 
 const auto submesh_list = [](auto& s, auto&& f) { submesh_fields(s, f); };
@@ -193,6 +231,18 @@ HostMesh unpack_mesh(const std::vector<char>& bytes) { return unpack_fields<Host
 std::vector<char> pack_state(const StateArrays& s) { return pack_fields(s, state_list); }
 StateArrays unpack_state(const std::vector<char>& bytes) {
   return unpack_fields<StateArrays>(bytes, state_list, "unpack_state");
+}
+
+long write_mesh_file(std::FILE* f, const HostMesh& m) {
+  Packer<FileSink> p{FileSink{f}};
+  const long start = std::ftell(f);
+  mesh_list(m, [&](const auto& v) { p.put(v); });
+  if (!p.sink.ok || std::fflush(f) != 0) return -1;
+  return std::ftell(f) - start;
+}
+
+HostMesh read_mesh_file(std::FILE* f, long bytes) {
+  return unpack_from<HostMesh>(FileSource{f, static_cast<size_t>(bytes)}, mesh_list, "read_mesh_file");
 }
 
 }  // namespace fdem

@@ -9,6 +9,7 @@
 #include "common/huge_pages.hpp"
 #include "common/setup_times.hpp"
 #include "io/output.hpp"
+#include "solver/kept_mesh.hpp"
 #include "solver/stable_step.hpp"
 #include "solver/summary.hpp"
 #include "solver/whole_state.hpp"
@@ -44,6 +45,10 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   whole_ifaces_ = counts_.at("interfaces").get<long>();
   if (restart) parts_->load(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, part ? part->mesh : *mesh_, sim_, history_part(part));
+  // the part's mesh is read again only by the snapshots' first frame (when they write /mesh from
+  // the parts) and the first cut of the parts anew: set aside until then, before the rest of the
+  // set-up adds its arrays (take_snapshot takes it back for that frame)
+  if (part && cuts_->part_mesh && !(snaps_ && snaps_->needs_part())) cuts_->part_mesh->set_aside();
   if (restart) {
     restore(*restart);
   } else {
@@ -141,7 +146,7 @@ template <int D>
 LoopEnd RunLoop<D>::run() {
   if (!restart_) {
     setup_times::Phase outputs("output_setup");
-    snaps_->take(sim_, frag_.get());
+    take_snapshot();
   } else if (opt_.progress && began_at_cut()) {
     progress_->note("fdem: step " + std::to_string(sim_.step_count) + ": the parts cut anew at the current "
                     "positions (" + std::to_string(cuts_->recuts) + (cuts_->recuts == 1 ? " cut" : " cuts") +
@@ -176,7 +181,7 @@ LoopEnd RunLoop<D>::run() {
       stop_reason = "load_drop";
       break;
     }
-    if (schedule_.take_snapshot(sim_.t)) snaps_->take(sim_, frag_.get());
+    if (schedule_.take_snapshot(sim_.t)) take_snapshot();
     if (schedule_.take_checkpoint(sim_.t)) save_checkpoint();
     progress_->update(sim_.step_count, sim_.t, c_.end_time);
     mark_pace();
@@ -186,7 +191,7 @@ LoopEnd RunLoop<D>::run() {
   progress_->update(sim_.step_count, sim_.t, c_.end_time, true);
   progress_->done();
   if (!schedule_.last_was_row()) final_row();
-  snaps_->take(sim_, frag_.get());
+  take_snapshot();
   return {LoopEnd::Kind::finished, finish(stop_reason, loop_wall), {}};
 }
 
@@ -205,6 +210,16 @@ int RunLoop<D>::interrupt_signal() const {
   return static_cast<int>(-v);
 }
 
+// A snapshot. The first of a run whose whole mesh no process holds writes /mesh from the part's
+// mesh: taken back from where the set-up set it aside for that frame, then set aside again.
+template <int D>
+void RunLoop<D>::take_snapshot() {
+  PartMeshAside* aside = snaps_->needs_part() ? cuts_->part_mesh : nullptr;
+  if (aside) aside->take_back();
+  snaps_->take(sim_, frag_.get());
+  if (aside && !snaps_->needs_part()) aside->set_aside();
+}
+
 template <int D>
 LoopEnd RunLoop<D>::interrupted() {
   const double loop_wall = prior_loop_wall_ + seconds(Clock::now() - loop0_);
@@ -212,7 +227,7 @@ LoopEnd RunLoop<D>::interrupted() {
   progress_->done();
   const char* name = signal_ == SIGINT ? "SIGINT" : signal_ == SIGTERM ? "SIGTERM" : "a signal";
   save_checkpoint();
-  snaps_->take(sim_, frag_.get());
+  take_snapshot();
   const std::string ck = out_ + "/checkpoint.h5";
   if (writes_)
     std::fprintf(stderr,

@@ -92,6 +92,7 @@ class RunLoop {
   LoopEnd recut();
   // Whether this run loop's parts began at a cut (their state is the cut's, not a checkpoint's).
   bool began_at_cut() const { return restart_ && restart_ == &cuts_->state; }
+  void take_snapshot();  // (the part's mesh taken back for the first frame where it writes /mesh)
   LoopEnd interrupted();
   // The signal that asks the run to stop (0: none); over several processes the same on each.
   int interrupt_signal() const;

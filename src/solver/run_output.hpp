@@ -121,6 +121,8 @@ class RunSnapshots {
   // without the parallel HDF5, from the mesh gathered on process 0 for it.
   RunSnapshots(const Case& c, const std::string& out, const SubMesh& part, bool writes);
   bool on() const { return writer_ != nullptr; }
+  // The next frame writes /mesh from the part's mesh (a run whose whole mesh no process holds).
+  bool needs_part() const { return rows_ != nullptr; }
   int frames() const { return writer_ ? writer_->frames() : 0; }
   // A frame of the present state, unless there is one of this step already.
   void take(Simulation<D>& sim, RunFragments<D>* frag);

@@ -14,8 +14,6 @@
 #include <numeric>
 #include <stdexcept>
 
-#include <unistd.h>
-
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
 #include "io/case.hpp"
@@ -28,6 +26,7 @@
 #include "parallel/partition.hpp"
 #include "solver/homogenise.hpp"
 #include "solver/interface_materials.hpp"
+#include "solver/kept_mesh.hpp"
 #include "solver/local_setup.hpp"
 #include "solver/run_loop.hpp"
 #include "solver/run_state.hpp"
@@ -63,44 +62,6 @@ void whole_rows_of(StateArrays& s, const std::string& name, const HostMesh& mesh
   s.f64[name] = std::move(v);
 }
 
-// Process 0 of a run with contact: the whole mesh it cuts the parts anew from, kept between the
-// cuts in a temporary file rather than in memory beside the model (written once: the mesh does not
-// change; read back at each cut). The file is in TMPDIR (else /tmp) and unlinked at once, so it is
-// gone when the process ends, however it ends.
-class KeptMesh {
- public:
-  KeptMesh() = default;
-  KeptMesh(const KeptMesh&) = delete;
-  KeptMesh& operator=(const KeptMesh&) = delete;
-  ~KeptMesh() {
-    if (f_) std::fclose(f_);
-  }
-  bool kept() const { return f_ != nullptr; }
-  void write(const HostMesh& m) {
-    const std::vector<char> b = pack_mesh(m);
-    const char* t = std::getenv("TMPDIR");
-    std::string path = std::string(t && *t ? t : "/tmp") + "/fdem-whole-mesh-XXXXXX";
-    const int fd = mkstemp(path.data());
-    if (fd >= 0) unlink(path.c_str());
-    f_ = fd >= 0 ? fdopen(fd, "w+b") : nullptr;
-    if (!f_ || std::fwrite(b.data(), 1, b.size(), f_) != b.size() || std::fflush(f_) != 0)
-      throw std::runtime_error("cannot keep the whole mesh (" + std::to_string(b.size()) +
-                               " bytes) in a temporary file in " + path.substr(0, path.rfind('/')) +
-                               " for cutting the parts anew: set TMPDIR to a folder with room");
-    bytes_ = b.size();
-  }
-  HostMesh read() const {
-    std::vector<char> b(bytes_);
-    if (std::fseek(f_, 0, SEEK_SET) != 0 || std::fread(b.data(), 1, b.size(), f_) != b.size())
-      throw std::runtime_error("cannot read back the whole mesh kept in a temporary file for cutting the parts anew");
-    return unpack_mesh(b);
-  }
-
- private:
-  std::FILE* f_ = nullptr;
-  size_t bytes_ = 0;
-};
-
 // A run over several processes (RunOptions::comm; docs/parallel.md): what it cannot do yet is
 // refused, naming the key. Process 0 meshes the case, partitions and decomposes it and sends each
 // process its part (the others never hold the whole mesh); every process runs its part; process 0
@@ -112,6 +73,7 @@ class ProcessesRun {
   ProcessesRun(const std::string& case_path, Case& c, const RunOptions& opt)
       : comm_(*opt.comm), root_(comm_.rank() == 0), c_(c), opt_(opt), prep_(prepare_run(case_path, c, opt)) {
     opt_.progress = opt.progress && root_;
+    cuts_.part_mesh = &part_aside_;
   }
   nlohmann::json run();
 
@@ -139,10 +101,11 @@ class ProcessesRun {
   double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
   std::unique_ptr<PartBuilder> parts_;  // process 0: builds every process's part as it is sent
   SubMesh part_;                           // this process's part
+  PartMeshAside part_aside_{part_};        // its mesh, between its run loop's set-up and its next reading
   // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up;
   // kept_ holds it during the run), and the contact zones' reach
   std::shared_ptr<const HostMesh> whole_;
-  KeptMesh kept_;
+  KeptMesh kept_{"for cutting the parts anew"};
   double whole_reach_ = 0;
   std::vector<int> elem_part_at_start_;  // process 0: the parts this run starts with
   CutHistory cuts_;
@@ -188,6 +151,7 @@ bool ProcessesRun::local_parts() {
                                  : partition_has_zoltan() ? PartitionMethod::ZoltanRcb
                                                           : PartitionMethod::Rcb;
   LocalSetup ls = local_setup(c_, comm_, prep_.coarse, method, region_sets_used(c_));
+  part_aside_.forget();
   part_ = std::move(ls.part);
   mean_size_ = ls.mean_size;
   prep_.coarse = HostMesh{};
@@ -208,6 +172,7 @@ bool ProcessesRun::local_parts() {
 void ProcessesRun::gather_for_cut() {
   if (!cuts_.mesh_by_parts) return;
   setup_times::Phase phase("whole_mesh_gathered");
+  part_aside_.take_back();
   HostMesh whole = gather_whole_mesh(comm_, part_);
   if (root_) kept_.write(whole);
   cuts_.mesh_by_parts = false;
@@ -322,6 +287,7 @@ void ProcessesRun::receive_part() {
         return pack_submesh(parts_->part(r));
       },
       mine);
+  part_aside_.forget();
   part_ = unpack_submesh(mine);
   std::vector<std::vector<char>> lists;
   for (int r = 0; root_ && r < comm_.size(); ++r) lists.push_back(pack_lists(parts_->lists(r)));

@@ -13,6 +13,8 @@
 
 namespace fdem {
 
+class PartMeshAside;  // solver/kept_mesh.hpp
+
 // What identifies a run for a restart (checkpoint header).
 struct RunIdentity {
   std::string case_hash, mesh_hash;
@@ -89,6 +91,9 @@ struct CutHistory {
   // gathers it): the snapshots' /mesh then comes from every process's rows.
   nlohmann::json mesh_report;
   bool mesh_by_parts = false;
+  // This process's part's mesh, set aside by the run loop once its set-up has read it and taken
+  // back for the snapshots' first frame (solver/kept_mesh.hpp; the run over processes owns it).
+  PartMeshAside* part_mesh = nullptr;
 
   // Checkpoint (process 0's whole state): the cuts, rebalances and elements moved so far, and the
   // parts of the last cut when there was one. load takes the counts of a checkpoint that has them
