@@ -83,7 +83,7 @@ KOKKOS_FORCEINLINE_FUNCTION double facing_fade(double facing) {
 template <int D>
 KOKKOS_FORCEINLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s, const double (&n)[D]) {
   double best = -1.0;
-  for (int q = S.nfoff(s); q < S.nfoff(s + 1); ++q) {
+  for (int q = S.faces_begin(s); q < S.faces_end(s); ++q) {
     const int f2 = S.nface(q);
     if (!S.factive(f2)) continue;
     double cw = 0;
@@ -213,7 +213,7 @@ struct SeedRow {
 template <int D>
 KOKKOS_INLINE_FUNCTION bool overhangs(const ContactSurface<D>& S, const Kokkos::View<double* [D]>& x, int a,
                                       const double (&t)[D]) {
-  for (int j = S.nfoff(a); j < S.nfoff(a + 1); ++j) {
+  for (int j = S.faces_begin(a); j < S.faces_end(a); ++j) {
     const int f = S.nface(j);
     if (face_interface(f, S.nb) >= 0 || !S.factive(f)) continue;
     double xf[D][D], n[D], d = 0;
@@ -261,7 +261,7 @@ template <int D>
 KOKKOS_INLINE_FUNCTION HandoverSeed<D> handover_seed(const ContactSurface<D>& S, const InterfaceData<D>& in,
                                                      const Kokkos::View<double* [D]>& x, int s) {
   HandoverSeed<D> r;
-  for (int t = S.nfoff(s); t < S.nfoff(s + 1); ++t) {
+  for (int t = S.faces_begin(s); t < S.faces_end(s); ++t) {
     const int q = face_interface(S.nface(t), S.nb);
     if (q < 0 || in.icontact(q) != kHandedNow) continue;
     int k = -1;

@@ -23,7 +23,7 @@ struct VertexGroups {
 
 // Surface data the narrow phase needs: face nodes, the reference positions X and the 2D
 // thickness (a face's share of its nodes' areas, face_share), which faces are active, the faces
-// around each node (CSR), each surface node's contact area (half its share of its active faces:
+// around each node, each surface node's contact area (half its share of its active faces:
 // both sides of a contact carry half; one row per place in the list of surface nodes), the
 // number of outer boundary faces nb (faces nb + 2q and nb + 2q + 1 are the two faces of
 // interface q: face_interface) and the vertex groups/clusters (see PairFilter).
@@ -39,7 +39,13 @@ struct ContactSurface {
   Kokkos::View<double* [D]> X;  // the model's reference positions (Model::X)
   double thick = 1.0;           // 2D: the thickness; 3D: 1
   Kokkos::View<int*> factive;
+  // the faces around each node: nface(faces_begin(i)) .. nface(faces_end(i) - 1), ascending; the
+  // offsets nfoff, or none where every node is on face_stride faces (a mesh with interfaces on every
+  // face: each node is one element's corner, on D of its faces)
   Kokkos::View<int*> nfoff, nface;
+  int face_stride = 0;
+  KOKKOS_INLINE_FUNCTION int faces_begin(int i) const { return face_stride > 0 ? face_stride * i : nfoff(i); }
+  KOKKOS_INLINE_FUNCTION int faces_end(int i) const { return face_stride > 0 ? face_stride * (i + 1) : nfoff(i + 1); }
   Kokkos::View<double*> narea;  // by place in the list of surface nodes (node_areas)
   // friction coefficient of each face (nf) when some interface is a frictional joint
   // (Model::ifric): the joint's for the faces of its interfaces, -1 (the contact law's) for the
@@ -306,7 +312,7 @@ void node_areas(const ContactSurface<D>& surf, const Kokkos::View<int*>& nodes_i
       "fdem::contact::node_area", Kokkos::RangePolicy<ExecSpace>(0, ns), KOKKOS_LAMBDA(const int p) {
         const int i = nodes(p);
         double a = 0.0;
-        for (int j = S.nfoff(i); j < S.nfoff(i + 1); ++j)
+        for (int j = S.faces_begin(i); j < S.faces_end(i); ++j)
           if (S.factive(S.nface(j))) a += 0.5 * face_share<D>(S, S.nface(j));
         S.narea(p) = a;
       });

@@ -122,6 +122,11 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   surf_.X = m.X;  // (the faces' shares computed from it: face_share)
   surf_.thick = thick;
   surf_.factive = Kokkos::View<int*>("fdem::contact::factive", nf_);
+  // (no offsets where every node is on D faces: ContactSurface::faces_begin)
+  bool uniform = true;
+  for (size_t i = 0; i < H.nfoff.size() && uniform; ++i) uniform = H.nfoff[i] == D * static_cast<long>(i);
+  surf_.face_stride = uniform ? D : 0;
+  if (uniform) std::vector<int>().swap(H.nfoff);
   surf_.nfoff = upload_int(H.nfoff, "fdem::contact::nfoff");
   surf_.nface = upload_int(H.nface, "fdem::contact::nface");
   surf_.vgrp = upload_int(G.vgrp, "fdem::contact::vgrp");
