@@ -50,47 +50,43 @@ double largest_displacement2(const Kokkos::View<double* [D]>& x, const Kokkos::V
   return d2;
 }
 
-// The surfaces before a handover: surface node marks, clusters and active faces (copies).
+// The surfaces before a handover: surface node marks and clusters (copies; which faces were
+// active the interfaces' flags still tell during the poll: ContactSurface::active_before_poll).
 struct SurfacesBefore {
-  Kokkos::View<int*> mark, clus, factive;
+  Kokkos::View<int*> mark, clus;
 };
 
-// Copies the current marks, clusters and active flags into `before` (device copies by kernels).
+// Copies the current marks and clusters into `before` (device copies by a kernel).
 template <int D>
 void save_surfaces(const Kokkos::View<int*>& mark_in, const ContactSurface<D>& surf,
-                   const SurfacesBefore& before, int nn, int nf) {
+                   const SurfacesBefore& before, int nn) {
   auto mark = mark_in;
   auto clus = surf.clus;
-  auto factive = surf.factive;
-  auto bm = before.mark, bc = before.clus, bf = before.factive;
+  auto bm = before.mark, bc = before.clus;
   Kokkos::parallel_for(
       "fdem::contact::save_nodes", Kokkos::RangePolicy<ExecSpace>(0, nn), KOKKOS_LAMBDA(const int i) {
         bm(i) = mark(i);
         bc(i) = clus(i);
       });
-  Kokkos::parallel_for(
-      "fdem::contact::save_faces", Kokkos::RangePolicy<ExecSpace>(0, nf),
-      KOKKOS_LAMBDA(const int f) { bf(f) = factive(f); });
 }
 
 // Touched nodes (tnode, nn) and faces (tface, nf) after a handover (see the file's comment), from
-// the surfaces before (`before`) and now (mark, surf).
+// the surfaces before (`before`, and the faces active before this poll) and now (mark, surf).
 template <int D>
 void touched(const Kokkos::View<int*>& mark_in, const ContactSurface<D>& surf, const SurfacesBefore& before,
              const Kokkos::View<int*>& tnode_in, const Kokkos::View<int*>& tface_in, int nn, int nf) {
   auto mark = mark_in;
-  auto clus = surf.clus;
-  auto factive = surf.factive;
-  auto fnode = surf.fnode;
-  auto bm = before.mark, bc = before.clus, bf = before.factive;
+  const ContactSurface<D> S = surf;
+  auto bm = before.mark, bc = before.clus;
   auto tnode = tnode_in, tface = tface_in;
   Kokkos::parallel_for(
       "fdem::contact::touched_nodes", Kokkos::RangePolicy<ExecSpace>(0, nn),
-      KOKKOS_LAMBDA(const int i) { tnode(i) = mark(i) && (!bm(i) || clus(i) != bc(i)) ? 1 : 0; });
+      KOKKOS_LAMBDA(const int i) { tnode(i) = mark(i) && (!bm(i) || S.clus(i) != bc(i)) ? 1 : 0; });
   Kokkos::parallel_for(
       "fdem::contact::touched_faces", Kokkos::RangePolicy<ExecSpace>(0, nf), KOKKOS_LAMBDA(const int f) {
-        bool t = factive(f) && !bf(f);
-        for (int k = 0; k < D && factive(f) && !t; ++k) t = clus(fnode(f, k)) != bc(fnode(f, k));
+        const bool active = S.active(f);
+        bool t = active && !S.active_before_poll(f);
+        for (int k = 0; k < D && active && !t; ++k) t = S.clus(S.fnode(f, k)) != bc(S.fnode(f, k));
         tface(f) = t ? 1 : 0;
       });
 }

@@ -85,7 +85,7 @@ KOKKOS_FORCEINLINE_FUNCTION double node_facing(const ContactSurface<D>& S, int s
   double best = -1.0;
   for (int q = S.faces_begin(s); q < S.faces_end(s); ++q) {
     const int f2 = S.nface(q);
-    if (!S.factive(f2)) continue;
+    if (!S.active(f2)) continue;
     double cw = 0;
     for (int k = 0; k < D; ++k) cw -= S.fgeo(S.fslot(f2), D + k) * n[k];
     best = cw > best ? cw : best;
@@ -215,7 +215,7 @@ KOKKOS_INLINE_FUNCTION bool overhangs(const ContactSurface<D>& S, const Kokkos::
                                       const double (&t)[D]) {
   for (int j = S.faces_begin(a); j < S.faces_end(a); ++j) {
     const int f = S.nface(j);
-    if (face_interface(f, S.nb) >= 0 || !S.factive(f)) continue;
+    if (face_interface(f, S.nb) >= 0 || !S.active(f)) continue;
     double xf[D][D], n[D], d = 0;
     int v[D];
     S.fnode.get(f, v);

@@ -38,7 +38,8 @@ struct ContactSurface {
   FaceNodes<D> fnode;
   Kokkos::View<double* [D]> X;  // the model's reference positions (Model::X)
   double thick = 1.0;           // 2D: the thickness; 3D: 1
-  Kokkos::View<int*> factive;
+  // the model's interface handover flags (Model::icontact): which faces are surfaces (active)
+  Kokkos::View<int*> icontact;
   // the faces around each node: nface(faces_begin(i)) .. nface(faces_end(i) - 1), ascending; the
   // offsets nfoff, or none where every node is on face_stride faces (a mesh with interfaces on every
   // face: each node is one element's corner, on D of its faces)
@@ -46,6 +47,18 @@ struct ContactSurface {
   int face_stride = 0;
   KOKKOS_INLINE_FUNCTION int faces_begin(int i) const { return face_stride > 0 ? face_stride * i : nfoff(i); }
   KOKKOS_INLINE_FUNCTION int faces_end(int i) const { return face_stride > 0 ? face_stride * (i + 1) : nfoff(i + 1); }
+  // Whether face f is a surface: an outer face, or a face of an interface handed over (computed
+  // where needed rather than stored for every face).
+  KOKKOS_INLINE_FUNCTION bool active(int f) const {
+    const int q = face_interface(f, nb);
+    return q < 0 || icontact(q) != 0;
+  }
+  // Whether it was one before the handovers of this poll (hand_over_failed marks those kHandedNow
+  // or kApartNow until ContactSystem::check_failures has updated the lists: clear_apart_marks).
+  KOKKOS_INLINE_FUNCTION bool active_before_poll(int f) const {
+    const int q = face_interface(f, nb);
+    return q < 0 || icontact(q) == 1;
+  }
   Kokkos::View<double*> narea;  // by place in the list of surface nodes (node_areas)
   // friction coefficient of each face (nf) when some interface is a frictional joint
   // (Model::ifric): the joint's for the faces of its interfaces, -1 (the contact law's) for the
@@ -134,19 +147,6 @@ double joint_face_friction(const ContactSurface<D>& surf, const Kokkos::View<dou
   return mu_max;
 }
 
-// Active faces: the outer boundary, and both faces of every handed-over interface.
-template <int D>
-void activate_faces(const ContactSurface<D>& surf, const Kokkos::View<int*>& icontact_in, int nf) {
-  auto factive = surf.factive;
-  const int nb = surf.nb;
-  auto icontact = icontact_in;
-  Kokkos::parallel_for(
-      "fdem::contact::factive", Kokkos::RangePolicy<ExecSpace>(0, nf), KOKKOS_LAMBDA(const int f) {
-        const int q = face_interface(f, nb);
-        factive(f) = q < 0 ? 1 : (icontact(q) ? 1 : 0);
-      });
-}
-
 // Clusters: within each vertex group, copies joined by intact interface pairs share the smallest
 // node id (surf.clus).
 // (IfaceView: Model::iface, View<int* [2 * D]>. A template parameter, not that type: nvcc 13's
@@ -184,16 +184,16 @@ void update_clusters(const VertexGroups& G, const ContactSurface<D>& surf, const
       });
 }
 
-// The indices i < n with flag(i) != 0, in order, into out (a compact list); returns their number.
-inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag_in,
-                           const Kokkos::View<int*>& out_in, int n) {
-  auto flag = flag_in;
+// The indices i < n with keep(i), in order, into out (a compact list); returns their number.
+// Keep: a device-callable predicate (Flagged: flag(i) != 0; ActiveFaces: ContactSurface::active).
+template <class Keep>
+int compact_where(const char* label, const Keep& keep, const Kokkos::View<int*>& out_in, int n) {
   auto out = out_in;
   int count = 0;
   Kokkos::parallel_scan(
       label, Kokkos::RangePolicy<ExecSpace>(0, n),
       KOKKOS_LAMBDA(const int i, int& upd, const bool final) {
-        if (flag(i)) {
+        if (keep(i)) {
           if (final) out(upd) = i;
           ++upd;
         }
@@ -202,21 +202,38 @@ inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag_in,
   return count;
 }
 
-// compact_flagged into `out` grown to hold the flagged entries (counted first; grown by half again
+// compact_where into `out` grown to hold the kept entries (counted first; grown by half again
 // when it grows, up to n, so that a list of the surfaces is sized by the surfaces that exist, not
 // by every node or face that may become one).
-inline int compact_flagged_grown(const char* label, const Kokkos::View<int*>& flag_in, Kokkos::View<int*>& out,
-                                 int n) {
-  auto flag = flag_in;
+template <class Keep>
+int compact_where_grown(const char* label, const Keep& keep, Kokkos::View<int*>& out, int n) {
   int count = 0;
   Kokkos::parallel_reduce(
-      label, Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i, int& c) { c += flag(i) ? 1 : 0; },
+      label, Kokkos::RangePolicy<ExecSpace>(0, n), KOKKOS_LAMBDA(const int i, int& c) { c += keep(i) ? 1 : 0; },
       count);
   if (static_cast<int>(out.extent(0)) < count) {
     const long cap = std::min<long>(n, count + count / 2 + 64L);
     out = Kokkos::View<int*>(Kokkos::view_alloc(Kokkos::WithoutInitializing, out.label()), cap);
   }
-  return compact_flagged(label, flag, out, n);
+  return compact_where(label, keep, out, n);
+}
+
+struct Flagged {
+  Kokkos::View<int*> flag;
+  KOKKOS_INLINE_FUNCTION bool operator()(const int i) const { return flag(i) != 0; }
+};
+template <int D>
+struct ActiveFaces {
+  ContactSurface<D> S;
+  KOKKOS_INLINE_FUNCTION bool operator()(const int f) const { return S.active(f); }
+};
+
+// The indices i < n with flag(i) != 0 (compact_where, compact_where_grown).
+inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag, const Kokkos::View<int*>& out, int n) {
+  return compact_where(label, Flagged{flag}, out, n);
+}
+inline int compact_flagged_grown(const char* label, const Kokkos::View<int*>& flag, Kokkos::View<int*>& out, int n) {
+  return compact_where_grown(label, Flagged{flag}, out, n);
 }
 
 // How many of the first n entries of an ascending list are below `bound`.
@@ -313,20 +330,23 @@ void node_areas(const ContactSurface<D>& surf, const Kokkos::View<int*>& nodes_i
         const int i = nodes(p);
         double a = 0.0;
         for (int j = S.faces_begin(i); j < S.faces_end(i); ++j)
-          if (S.factive(S.nface(j))) a += 0.5 * face_share<D>(S, S.nface(j));
+          if (S.active(S.nface(j))) a += 0.5 * face_share<D>(S, S.nface(j));
         S.narea(p) = a;
       });
 }
 
 // Model::icontact of an interface handed over at this poll whose state passes to the contacts of
 // its nodes (the narrow phase's HandoverSeed, kernels/contact/narrow_phase.hpp); after that pass
-// it becomes 1 like every handed-over interface (clear_handover_marks).
+// it becomes 1 like every handed-over interface (clear_handover_marks). kApartNow: one handed over
+// at this poll that carried nothing (1 once the poll has updated the lists: clear_apart_marks).
+// Both tell the faces that become surfaces at this poll (ContactSurface::active_before_poll).
 inline constexpr int kHandedNow = 2;
+inline constexpr int kApartNow = 3;
 
 // Hands every failed interface (damage 1 at all its points) that has parted or come apart over
 // to contact; ni: the number of interfaces. One that has parted gets m.icontact(q) = kHandedNow:
 // it still carried its compression and friction, which its nodes' contacts take over. One that
-// has come apart (interface_apart) carried nothing already: 1. Returns how many. Clears the
+// has come apart (interface_apart) carried nothing already: kApartNow. Returns how many. Clears the
 // force kernel's flag m.icontact_pending (by a kernel: no copy to the device).
 template <int D>
 int hand_over_failed(const Model<D>& m, int ni) {
@@ -354,7 +374,7 @@ int hand_over_failed(const Model<D>& m, int ni) {
         for (int k = 0; k < D; ++k) h[k] = load_point(ihist, q, k);
         const bool apart = interface_apart<D>(xa, xb, h);
         if (apart || interface_parted<D>(xa, xb, slip)) {
-          icontact(q) = apart ? 1 : kHandedNow;
+          icontact(q) = apart ? kApartNow : kHandedNow;
           ++cnt;
         }
       },
@@ -365,6 +385,16 @@ int hand_over_failed(const Model<D>& m, int ni) {
         "fdem::contact::pending_clear", Kokkos::RangePolicy<ExecSpace>(0, 1),
         KOKKOS_LAMBDA(const int) { pending() = 0; });
   return n;
+}
+
+// The interfaces handed over at this poll that carried nothing (kApartNow) handed over like any
+// other (icontact 1), once the poll has updated the lists.
+inline void clear_apart_marks(const Kokkos::View<int*>& icontact_in, int ni) {
+  auto icontact = icontact_in;
+  Kokkos::parallel_for(
+      "fdem::contact::apart_marks", Kokkos::RangePolicy<ExecSpace>(0, ni), KOKKOS_LAMBDA(const int q) {
+        if (icontact(q) == kApartNow) icontact(q) = 1;
+      });
 }
 
 // After the narrow pass that took their state over: the interfaces handed over at this poll are

@@ -121,7 +121,7 @@ void ContactSystem<D>::upload(ContactFaces& F, FaceShares& H, HostVertexGroups& 
   surf_.fslot = Kokkos::View<int*>("fdem::contact::fslot", nf_);
   surf_.X = m.X;  // (the faces' shares computed from it: face_share)
   surf_.thick = thick;
-  surf_.factive = Kokkos::View<int*>("fdem::contact::factive", nf_);
+  surf_.icontact = m.icontact;  // (which faces are active: ContactSurface::active)
   // (no offsets where every node is on D faces: ContactSurface::faces_begin)
   bool uniform = true;
   for (size_t i = 0; i < H.nfoff.size() && uniform; ++i) uniform = H.nfoff[i] == D * static_cast<long>(i);
@@ -216,7 +216,6 @@ void ContactSystem<D>::ensure_update_arrays() {
   if (tnode_.extent(0) > 0) return;
   before_.mark = Kokkos::View<int*>("fdem::contact::mark_before", nn_);
   before_.clus = Kokkos::View<int*>("fdem::contact::clus_before", nn_);
-  before_.factive = Kokkos::View<int*>("fdem::contact::factive_before", nf_);
   tnode_ = Kokkos::View<int*>("fdem::contact::tnode", nn_);
   tface_ = Kokkos::View<int*>("fdem::contact::tface", nf_);
   tlist_ = Kokkos::View<int*>("fdem::contact::tlist", 0);  // (sized by update_lists)
@@ -224,9 +223,8 @@ void ContactSystem<D>::ensure_update_arrays() {
 
 template <int D>
 void ContactSystem<D>::refresh_surfaces(const Model<D>& m) {
-  activate_faces<D>(surf_, m.icontact, nf_);
   update_clusters<D>(groups_, surf_, m.iface, m.icontact);
-  na_ = compact_flagged_grown("fdem::contact::active_faces", surf_.factive, afaces_, nf_);
+  na_ = compact_where_grown("fdem::contact::active_faces", ActiveFaces<D>{surf_}, afaces_, nf_);
   if (static_cast<int>(surf_.fgeo.extent(0)) < na_)  // grows with the surfaces (with headroom)
     surf_.fgeo = Kokkos::View<double**>("fdem::contact::fgeo", std::min(nf_, 3 * na_ / 2 + 64), FaceGeo<D>::size);
   face_slots<D>(surf_, afaces_, na_);
@@ -268,11 +266,12 @@ void ContactSystem<D>::check_failures(const Model<D>& m) {
   const bool lists = may_meet_ && !need_build_ && xb_all_ && builds_ > 0 && ns_ > 0 && na_ > 0;
   if (lists) {
     ensure_update_arrays();
-    save_surfaces<D>(mark_, surf_, before_, nn_, nf_);
+    save_surfaces<D>(mark_, surf_, before_, nn_);
   }
   may_meet_ = true;
   refresh_surfaces(m);
   if (lists) update_lists(m);
+  clear_apart_marks(m.icontact, ni_);  // (the faces new at this poll told apart until here)
 }
 
 template <int D>

@@ -48,7 +48,10 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   // the part's mesh is read again only by the snapshots' first frame (when they write /mesh from
   // the parts) and the first cut of the parts anew: set aside until then, before the rest of the
   // set-up adds its arrays (take_snapshot takes it back for that frame)
-  if (part && cuts_->part_mesh && !(snaps_ && snaps_->needs_part())) cuts_->part_mesh->set_aside();
+  if (part && cuts_->part_mesh && !(snaps_ && snaps_->needs_part())) {
+    setup_times::Phase aside("part_mesh_set_aside");
+    cuts_->part_mesh->set_aside();
+  }
   if (restart) {
     restore(*restart);
   } else {
