@@ -277,7 +277,8 @@ nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
       "mesh_checks", "renumbering", "interface_insertion", "local_parts", "local_sizes", "local_part",
       "local_whole_facts", "whole_mesh_gathered", "decomposition",
       "parts_sent", "mesh_kept",
-      "model_elements", "model_interfaces", "contact_setup", "model_build", "output_setup", "other"};
+      "model_elements", "model_interfaces", "contact_setup", "model_build", "part_mesh_set_aside", "heap_released",
+      "output_setup", "other"};
   const nlohmann::json st = setup_times::report();
   std::vector<double> mine(names.size() + 4, 0.0);
   for (const auto& ph : st.at("phases")) {
