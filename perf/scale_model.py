@@ -48,10 +48,10 @@ MEASURED = {
     "cut_s": 27.1,                  # every element moved (the test hook)
     "state_bytes_per_tet": 930,     # the whole state a cut gathers on process 0
     # the device's Views per tetrahedron, intact (one thread, which since 2026-12-07 holds no scatter
-    # copy: the same as a GPU's; one process, summary.json memory.views; thirty-first session)
-    "views_bytes_per_tet": 1298,
-    # each process's peak resident memory (0.990 GB for 481 344; 2026-12-07, thirty-first session)
-    "peak_bytes_per_own_tet": 2056,
+    # copy: the same as a GPU's; one process, summary.json memory.views; thirty-second session)
+    "views_bytes_per_tet": 1204,
+    # each process's peak resident memory (0.895 GB for 481 344; 2026-12-07, thirty-second session)
+    "peak_bytes_per_own_tet": 1860,
     # each process's local set-up (summary.json's local_parts with local_sizes, local_part and
     # local_whole_facts: its coarse elements refined, its neighbourhood refined with its interfaces,
     # the part cut, the whole mesh's facts summed), per own tetrahedron: the median of four runs of
