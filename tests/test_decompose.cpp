@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <memory>
@@ -448,6 +449,16 @@ TEST(Decompose, MeshKeptInAFileAndPartMeshSetAsideComeBackTheSame) {
   EXPECT_EQ(pack_mesh(s.mesh), pack_mesh(m0));
   aside.take_back();  // (not aside: nothing)
   EXPECT_EQ(pack_submesh(s), before);
+  {  // no room for the file (a TMPDIR that does not exist): a warning, and the mesh stays
+    const char* t = std::getenv("TMPDIR");
+    const std::string saved = t ? t : "";
+    setenv("TMPDIR", "/nonexistent/fdem-test-dir", 1);
+    aside.set_aside();
+    if (t) setenv("TMPDIR", saved.c_str(), 1);
+    else unsetenv("TMPDIR");
+    EXPECT_FALSE(aside.aside());
+    EXPECT_EQ(pack_submesh(s), before);
+  }
 
   std::FILE* f = std::tmpfile();
   ASSERT_NE(f, nullptr);

@@ -1,5 +1,6 @@
 #include "solver/kept_mesh.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <stdexcept>
 #include <utility>
@@ -39,7 +40,13 @@ void KeptMesh::drop() {
 void PartMeshAside::set_aside() {
   if (aside_) return;
   HostMesh& m = part_.mesh;
-  file_.write(m);
+  try {
+    file_.write(m);
+  } catch (const std::runtime_error& e) {  // (no room: the run goes on with the mesh in memory, as before)
+    file_.drop();
+    std::fprintf(stderr, "fdem: warning: %s; the part's mesh stays in memory\n", e.what());
+    return;
+  }
   HostMesh shell;  // the counts and names the run may still ask of it
   shell.dim = m.dim;
   shell.region_names = m.region_names;

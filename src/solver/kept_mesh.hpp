@@ -44,7 +44,9 @@ class PartMeshAside {
  public:
   explicit PartMeshAside(SubMesh& part) : part_(part), file_("for the part's mesh until it is read again") {}
   bool aside() const { return aside_; }
-  void set_aside();  // (its pages given back to the kernel)
+  // (its pages given back to the kernel; where the file cannot be written, a warning and the mesh
+  // stays in memory)
+  void set_aside();
   void take_back();  // (nothing when it is not aside)
   // The part was replaced by another (a cut's, a set-up's): nothing of the old one is taken back.
   void forget();
