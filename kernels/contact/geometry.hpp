@@ -75,6 +75,16 @@ KOKKOS_INLINE_FUNCTION double face_normal(const double (&xf)[D][D], double (&n)[
   }
 }
 
+// A face's share of each of its D nodes' areas: its measure (thickness included: 2D) over D. One
+// definition for the set-up's potential areas (solver/contact_topology.cpp, face_shares) and the
+// surface nodes' areas during the run (surfaces.hpp, face_share): the same bits in both.
+template <int D>
+KOKKOS_INLINE_FUNCTION double face_share_of(const double (&xf)[D][D], double thick) {
+  double n[D];
+  const double meas = face_normal<D>(xf, n) * thick;
+  return meas / D;
+}
+
 // Signed distance g of point p from the plane of a face along its outward normal n (g < 0: p is
 // behind the face, i.e. inside its element's side) and the barycentric coordinates N of p's
 // orthogonal projection on that plane (all in [0, 1]: the projection lies on the face). For a flat

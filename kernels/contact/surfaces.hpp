@@ -228,10 +228,7 @@ struct ActiveFaces {
   KOKKOS_INLINE_FUNCTION bool operator()(const int f) const { return S.active(f); }
 };
 
-// The indices i < n with flag(i) != 0 (compact_where, compact_where_grown).
-inline int compact_flagged(const char* label, const Kokkos::View<int*>& flag, const Kokkos::View<int*>& out, int n) {
-  return compact_where(label, Flagged{flag}, out, n);
-}
+// The indices i < n with flag(i) != 0, into `out` grown to hold them (compact_where_grown).
 inline int compact_flagged_grown(const char* label, const Kokkos::View<int*>& flag, Kokkos::View<int*>& out, int n) {
   return compact_where_grown(label, Flagged{flag}, out, n);
 }
@@ -270,7 +267,7 @@ void mark_surface_nodes(const ContactSurface<D>& surf, const Kokkos::View<int*>&
       });
 }
 
-// mark(list(b)) = b + 1 for the n nodes of `list` (after compact_flagged: the surface nodes, so
+// mark(list(b)) = b + 1 for the n nodes of `list` (after compact_flagged_grown: the surface nodes, so
 // that mark, still non-zero exactly on them, also gives each node's place in the list;
 // ContactSystem::surface_places).
 inline void number_listed(const Kokkos::View<int*>& mark_in, const Kokkos::View<int*>& list_in, int n) {
@@ -304,18 +301,16 @@ int flag_free_elements(const ContactSurface<D>& surf, const Kokkos::View<int*>& 
   return nfree;
 }
 
-// Face f's share of each of its nodes' areas: its measure at the reference positions (thickness
-// included) over D; computed where needed rather than stored for every face (the same operations
-// as the set-up's face_shares, solver/contact_topology.cpp: the same bits).
+// Face f's share of each of its nodes' areas at the reference positions (face_share_of),
+// computed where needed rather than stored for every face.
 template <int D>
 KOKKOS_INLINE_FUNCTION double face_share(const ContactSurface<D>& S, int f) {
-  double xf[D][D], n[D];
+  double xf[D][D];
   int v[D];
   S.fnode.get(f, v);
   for (int a = 0; a < D; ++a)
     for (int k = 0; k < D; ++k) xf[a][k] = S.X(v[a], k);
-  const double meas = face_normal<D>(xf, n) * S.thick;
-  return meas / D;
+  return face_share_of<D>(xf, S.thick);
 }
 
 // Contact area of each of the ns surface nodes `nodes` (surf.narea, by place in the list): half

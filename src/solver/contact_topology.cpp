@@ -164,11 +164,10 @@ FaceShares face_shares(const HostMesh& mesh, const ContactFaces& F, double thick
   nfcount.assign(nn + 1, 0);
   area.assign(nn, 0.0);
   for (int f = 0; f < nf; ++f) {
-    double xf[D][D], n[D];
+    double xf[D][D];
     for (int a = 0; a < D; ++a)
       for (int k = 0; k < D; ++k) xf[a][k] = mesh.X[static_cast<size_t>(fnode[static_cast<size_t>(f) * D + a]) * D + k];
-    const double meas = face_normal<D>(xf, n) * thick;
-    const double share = meas / D;
+    const double share = face_share_of<D>(xf, thick);
     for (int a = 0; a < D; ++a) {
       const int i = fnode[static_cast<size_t>(f) * D + a];
       ++nfcount[i + 1];

@@ -20,8 +20,8 @@ struct ContactFaces {
 };
 
 // The faces around each node (CSR: nface(nfoff(i)) .. nface(nfoff(i + 1) - 1)), and each node's
-// share of every face it can ever be part of (a face's share of its nodes' areas: its measure over
-// D, thickness included; face_share, kernels/contact/surfaces.hpp, computes the same on the device).
+// share of every face it can ever be part of (a face's share of its nodes' areas: face_share_of,
+// kernels/contact/geometry.hpp, as the run's surface areas take it).
 struct FaceShares {
   std::vector<int> nfoff, nface;
   std::vector<double> area;

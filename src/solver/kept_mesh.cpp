@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include <unistd.h>
 
@@ -47,29 +48,18 @@ void PartMeshAside::set_aside() {
     std::fprintf(stderr, "fdem: warning: %s; the part's mesh stays in memory\n", e.what());
     return;
   }
-  HostMesh shell;  // the counts and names the run may still ask of it
-  shell.dim = m.dim;
-  shell.region_names = m.region_names;
-  shell.bodies = m.bodies;
-  shell.owned_nodes = m.owned_nodes;
-  shell.owned_elems = m.owned_elems;
-  shell.owned_ifaces = m.owned_ifaces;
-  shell.bulk_elems = m.bulk_elems;
-  shell.whole_set_size = m.whole_set_size;
-  shell.node_sets = std::move(m.node_sets);  // (small: kept, should anything read them)
-  shell.face_sets = std::move(m.face_sets);
-  shell.iface_sets = std::move(m.iface_sets);
-  shell.pieces = m.pieces;
-  shell.whole_min_size = m.whole_min_size;
-  m = std::move(shell);
+  // its nodes, elements and interfaces go; its counts, names and sets stay (what the run may ask)
+  std::vector<double>().swap(m.X);
+  for (std::vector<int>* v : {&m.elems, &m.elem_region, &m.ifaces, &m.iface_elems, &m.node_origin, &m.outer_faces,
+                              &m.iface_ids})
+    std::vector<int>().swap(*v);
   aside_ = true;
   release_free_heap();
 }
 
 void PartMeshAside::take_back() {
   if (!aside_) return;
-  HostMesh back = file_.read();  // (the sets were kept: the file's are the same)
-  part_.mesh = std::move(back);
+  part_.mesh = file_.read();  // (the file's counts, names and sets are the ones kept)
   aside_ = false;
 }
 
