@@ -563,6 +563,15 @@ RefinedPart refine_elements(const HostMesh& m, const CoarseTopology& t, const st
   std::unordered_map<std::int64_t, int> local;
   const std::int64_t per_elem = static_cast<std::int64_t>(refine_factor(d, t.levels) + 0.5);
   local.reserve(static_cast<std::size_t>(coarse_elems.size() * per_elem / (d == 2 ? 2 : 5) + 16));
+  // (the arrays sized before they are filled: the elements exactly, the nodes about; a vector grown
+  // by doubling touches about twice its pages, and the set-up of a large mesh is mostly first touches)
+  const std::size_t kids = coarse_elems.size() * static_cast<std::size_t>(per_elem);
+  f.elems.reserve(kids * npe);
+  f.elem_region.reserve(kids);
+  out.elem_gid.reserve(kids);
+  const std::size_t nodes_about = kids / (d == 2 ? 1 : 4) + 16;  // (about 1/2 and 1/5 of them)
+  f.X.reserve(nodes_about * d);
+  out.node_gid.reserve(nodes_about);
   // the lattice of one element: (m+1)^dim slots by (b_1, .., b_dim)
   const int side = mm + 1;
   std::vector<int> slot(d == 2 ? side * side : side * side * side, -1);

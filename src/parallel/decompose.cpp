@@ -377,6 +377,12 @@ SubMesh Decomposer::part(int p) {
   for (int n : it.nodes) nlocal_[n] = -1;
   for (int e : it.els) elocal_[e] = -1;
   for (int q : it.ifs) ilocal_[q] = -1;
+  // the local items' whole mesh's indices (moved, not copied: at 1e7 tetrahedra each copy is tens
+  // of MB of fresh pages)
+  s.node_global = std::move(it.nodes);
+  s.elem_global = std::move(it.els);
+  s.mesh.iface_ids = it.ifs;  // (the strength scatter's draw: solver/interface_materials.cpp)
+  s.iface_global = std::move(it.ifs);
   return s;
 }
 
@@ -399,6 +405,11 @@ void Decomposer::select_items(int p, PartItems& it) {
       els.push_back(e);
     }
   };
+  // (room for about what a part holds, so that neither grows by copying: untouched room costs no
+  // memory)
+  const size_t own = own_.own_elems[p].size() + (zoned_ ? contact_.zones[p].size() : 0);
+  els.reserve(own + own / 2);
+  ifs.reserve(static_cast<size_t>(npe_) * (own + own / 2) / 2);
   for (int e : own_.own_elems[p]) add_elem(e);
   for (int n : own_.own_nodes[p])
     for (int k = n2e_.start[n]; k < n2e_.start[n + 1]; ++k) add_elem(n2e_.items[k]);
@@ -440,6 +451,7 @@ void Decomposer::order_elements(int p, PartItems& it) const {
     return 2;
   };
   std::vector<std::pair<int, int>> keyed;
+  keyed.reserve(it.els.size());
   for (int e : it.els) keyed.push_back({eclass(e), e});
   std::sort(keyed.begin(), keyed.end());
   int eo = 0, eb = 0;
@@ -473,8 +485,10 @@ void Decomposer::order_ghost_nodes(int p, PartItems& it) {
   for (int n : nds) it.inert += nlocal_[n] != 1;
   for (int n : nds) nlocal_[n] = -1;
   for (int n : own_.own_nodes[p]) nlocal_[n] = -1;
+  it.nodes.reserve(own_.own_nodes[p].size() + nds.size());
   it.nodes = own_.own_nodes[p];
   it.nodes.insert(it.nodes.end(), nds.begin(), nds.end());
+  std::vector<int>().swap(nds);
 }
 
 // Interfaces: the counted ones, then the others; each group in order of its side-A element's local
@@ -498,8 +512,8 @@ void Decomposer::order_interfaces(int p, PartItems& it) {
       std::count_if(it.ifs.begin(), it.ifs.end(), [&](int q) { return owner[inode(q, 0)] == p; }));
 }
 
-// The local mesh (the items in their order, renumbered; with contact the outer faces it holds), the
-// local items' whole mesh's indices and the positions the zones were taken at.
+// The local mesh (the items in their order, renumbered; with contact the outer faces it holds) and
+// the positions the zones were taken at.
 void Decomposer::local_mesh(const PartItems& it, SubMesh& s) {
   const std::vector<int>& nodes = it.nodes;
   const std::vector<int>& els = it.els;
@@ -517,7 +531,13 @@ void Decomposer::local_mesh(const PartItems& it, SubMesh& s) {
   for (size_t j = 0; j < nodes.size(); ++j) nlocal_[nodes[j]] = static_cast<int>(j);
   for (size_t j = 0; j < els.size(); ++j) elocal_[els[j]] = static_cast<int>(j);
   for (size_t j = 0; j < ifs.size(); ++j) ilocal_[ifs[j]] = static_cast<int>(j);
+  // (every array sized before it is filled: a vector grown by doubling touches about twice its
+  // pages, and at 1e7 tetrahedra the set-up's time is mostly first touches)
   m.X.reserve(nodes.size() * D);
+  m.node_origin.reserve(nodes.size());
+  m.elem_region.reserve(els.size());
+  m.ifaces.reserve(ifs.size() * 2 * D);
+  m.iface_elems.reserve(ifs.size() * 2);
   for (int n : nodes) {
     for (int k = 0; k < D; ++k) m.X.push_back(w_.X[static_cast<size_t>(n) * D + k]);
     m.node_origin.push_back(w_.node_origin.empty() ? n : w_.node_origin[n]);
@@ -544,15 +564,11 @@ void Decomposer::local_mesh(const PartItems& it, SubMesh& s) {
         for (int a = 0; a < D; ++a) m.outer_faces.push_back(nlocal_[c.outer[f * D + a]]);
     }
   }
-  s.node_global = nodes;
   if (at_) {
     s.cut_x.resize(nodes.size() * static_cast<size_t>(D));
     for (size_t j = 0; j < nodes.size(); ++j)
       for (int k = 0; k < D; ++k) s.cut_x[j * D + k] = (*at_)[static_cast<size_t>(nodes[j]) * D + k];
   }
-  s.elem_global = els;
-  s.iface_global = ifs;
-  m.iface_ids = ifs;  // (the strength scatter's draw: solver/interface_materials.cpp)
 }
 
 // The sets: node sets of the own nodes, interface sets of the counted interfaces (local indices).
