@@ -58,10 +58,10 @@ MEASURED = {
     # 10 255 360 tetrahedra on 2 processes at 3a93bbf, with huge pages (docs/parallel.md, "1e7
     # tetrahedra on this machine": 18.1, 11.3, 10.4, 14.4 s for 5 127 680 own)
     "local_part_s_per_own_tet": 12.85 / 5127680,
-    # process 0 gathering the whole mesh from the parts (a local set-up's first cut; measured when the
-    # set-up gathered it, 2026-12-06 evening, fdem run on 2 processes, quiet: summary.json
-    # `whole_mesh_gathered`, 0.79 and 0.85 s), per tetrahedron
-    "gather_s_per_tet": 0.82 / 962688,
+    # process 0 building the whole mesh from the coarse one (a local set-up's first cut; 2026-12-08,
+    # fdem run on 2 processes with FDEM_TEST_RECUT=20, summary.json processes.setup_phase_wall_seconds
+    # `whole_mesh_rebuilt`, 0.94 s; docs/parallel.md, "The part's mesh let go"), per tetrahedron
+    "rebuild_s_per_tet": 0.94 / 962688,
 }
 
 # Assumptions (none measured here): the machines of the target.
@@ -149,7 +149,7 @@ def model(m, total, procs, refine):
                  f"tetrahedron on process 0, then each part's own set-up ({1e6 * own_per_tet:.1f} us per own "
                  f"tetrahedron); process 0's memory {p0_mem / 1e9:.0f} GB ({fits})"))
     setup_local = coarse * GMSH_S_PER_TET + per * (local_per_tet + own_per_tet)
-    gather = total * m["gather_s_per_tet"]
+    rebuild = total * m["rebuild_s_per_tet"]
     rows.append(("set-up, local (fdem run today)", fmt_time(setup_local), fmt_time(setup_local),
                  fmt_time(setup_local),
                  f"the coarse mesh on process 0, then each process builds its part from its coarse elements and "
@@ -168,8 +168,8 @@ def model(m, total, procs, refine):
     rows.append(("a cut today (process 0)", fmt_time(cut_today), fmt_time(cut_today), fmt_time(cut_today),
                  f"the whole state ({state / 1e9:.0f} GB) gathered on process 0 and broadcast "
                  f"({1e6 * m['cut_s'] / n:.0f} us per tetrahedron measured), and at a locally set-up run's first "
-                 f"cut the whole mesh gathered there too ({1e6 * m['gather_s_per_tet']:.1f} us per tetrahedron, "
-                 f"{fmt_time(gather)}): a run this size must not cut (a contact zone wide enough for the run) "
+                 f"cut the whole mesh built there from the coarse one ({1e6 * m['rebuild_s_per_tet']:.1f} us per "
+                 f"tetrahedron, {fmt_time(rebuild)}): a run this size must not cut (a contact zone wide enough for the run) "
                  "until the distributed cut exists"))
     return per, rows
 

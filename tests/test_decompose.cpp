@@ -418,47 +418,46 @@ TEST(Decompose, PartsBuiltOneAtATimeAreTheSameAsAllAtOnce) {
 }
 
 // A mesh kept in a temporary file field by field (KeptMesh) reads back as pack_mesh's bytes; a
-// part's mesh set aside (PartMeshAside) keeps its counts, names and sets meanwhile and comes back
-// the same; a file cut short is refused.
-TEST(Decompose, MeshKeptInAFileAndPartMeshSetAsideComeBackTheSame) {
+// TMPDIR that cannot hold it is named; a part's mesh let go (release_part_mesh) keeps its own
+// counts, names and sets; a file cut short is refused.
+TEST(Decompose, MeshKeptInAFileComesBackTheSameAndAPartsMeshLetGoKeepsItsSets) {
   const HostMesh box = half_fracturable_box();
   KeptMesh kept("for the test");
   kept.write(box);
   EXPECT_EQ(pack_mesh(kept.read()), pack_mesh(box));
   EXPECT_EQ(pack_mesh(kept.read()), pack_mesh(box));  // (read again: from the start)
+  {  // no room for the file (a TMPDIR that does not exist): the error names the folder
+    const char* t = std::getenv("TMPDIR");
+    const std::string saved = t ? t : "";
+    setenv("TMPDIR", "/nonexistent/fdem-test-dir", 1);
+    KeptMesh no_room("for the test");
+    try {
+      no_room.write(box);
+      ADD_FAILURE() << "a mesh kept in a folder that does not exist";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("/nonexistent/fdem-test-dir"), std::string::npos) << e.what();
+    }
+    if (t) setenv("TMPDIR", saved.c_str(), 1);
+    else unsetenv("TMPDIR");
+    EXPECT_FALSE(no_room.kept());
+  }
 
   const int parts = 2;
   std::vector<SubMesh> subs = decompose(box, partition_elements(box, parts, PartitionMethod::Rcb), parts, 0.3);
   SubMesh& s = subs[1];
-  const std::vector<char> before = pack_submesh(s);
   const HostMesh m0 = s.mesh;
-  PartMeshAside aside(s);
-  aside.set_aside();
-  EXPECT_TRUE(aside.aside());
+  ASSERT_GT(m0.num_elems(), 0);
+  release_part_mesh(s);
   EXPECT_EQ(s.mesh.num_nodes(), 0);
   EXPECT_EQ(s.mesh.num_elems(), 0);
   EXPECT_EQ(s.mesh.num_ifaces(), 0);
+  EXPECT_EQ(s.mesh.X.capacity(), 0u);
+  EXPECT_EQ(s.mesh.elems.capacity(), 0u);
   EXPECT_EQ(s.mesh.owned_nodes, m0.owned_nodes);
   EXPECT_EQ(s.mesh.owned_elems, m0.owned_elems);
   EXPECT_EQ(s.mesh.pieces, m0.pieces);
   EXPECT_EQ(s.mesh.node_sets, m0.node_sets);
   EXPECT_EQ(s.mesh.region_names, m0.region_names);
-  aside.take_back();
-  EXPECT_FALSE(aside.aside());
-  EXPECT_EQ(pack_submesh(s), before);
-  EXPECT_EQ(pack_mesh(s.mesh), pack_mesh(m0));
-  aside.take_back();  // (not aside: nothing)
-  EXPECT_EQ(pack_submesh(s), before);
-  {  // no room for the file (a TMPDIR that does not exist): a warning, and the mesh stays
-    const char* t = std::getenv("TMPDIR");
-    const std::string saved = t ? t : "";
-    setenv("TMPDIR", "/nonexistent/fdem-test-dir", 1);
-    aside.set_aside();
-    if (t) setenv("TMPDIR", saved.c_str(), 1);
-    else unsetenv("TMPDIR");
-    EXPECT_FALSE(aside.aside());
-    EXPECT_EQ(pack_submesh(s), before);
-  }
 
   std::FILE* f = std::tmpfile();
   ASSERT_NE(f, nullptr);

@@ -114,6 +114,30 @@ TEST(Setup, PhasesNestAndAddUp) {
   EXPECT_NE(st::line().find("inner "), std::string::npos) << st::line();
 }
 
+// Phases opened in a Folded scope record nothing of their own: the phase around it counts their time.
+TEST(Setup, PhasesInAFoldedScopeCountInTheOneAroundIt) {
+  namespace st = fdem::setup_times;
+  st::reset();
+  {
+    st::Phase outer("outer");
+    st::Folded folded;
+    st::Phase inner("inner");
+    std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  }
+  st::Phase after("after");  // (outside the scope again: its own)
+  std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  after.stop();
+  st::finish();
+  const auto r = st::report();
+  std::map<std::string, double> wall;
+  for (const auto& p : r.at("phases")) wall[p.at("name").get<std::string>()] = p.at("wall_seconds").get<double>();
+  EXPECT_EQ(wall.count("inner"), 0u);
+  ASSERT_EQ(wall.count("outer"), 1u);
+  EXPECT_GE(wall["outer"], 0.03);
+  ASSERT_EQ(wall.count("after"), 1u);
+  EXPECT_GE(wall["after"], 0.01);
+}
+
 // The boundary faces as before: every face sorted by its node set, those that occur once and
 // are no side of an interface, in order of (element, local face).
 std::vector<int> boundary_faces_by_sorting(const fdem::HostMesh& m) {

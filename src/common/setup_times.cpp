@@ -28,6 +28,7 @@ struct State {
   double total_wall = -1, total_cpu = -1;  // at finish()
   double peak_at_finish = -1;
   double gmsh_peak = 0;
+  int folded = 0;  // Folded scopes alive
 };
 
 State& state() {
@@ -127,8 +128,12 @@ std::string line() {
   return out + buf;
 }
 
+Folded::Folded() { ++state().folded; }
+Folded::~Folded() { --state().folded; }
+
 Phase::Phase(std::string name)
     : name_(std::move(name)),
+      outer_(state().folded == 0),
       wall0_(Clock::now()),
       cpu0_(process_cpu_seconds()),
       inner_wall0_(state().recorded_wall),
@@ -138,6 +143,7 @@ void Phase::stop() {
   if (!open_) return;
   open_ = false;
   const State& s = state();
+  if (s.folded > 0 && !outer_) return;  // (counted by the phase that holds the Folded scope)
   const double inner_wall = s.recorded_wall - inner_wall0_, inner_cpu = s.recorded_cpu - inner_cpu0_;
   add(name_, std::max(0.0, seconds_since(wall0_) - inner_wall),
       std::max(0.0, process_cpu_seconds() - cpu0_ - inner_cpu));

@@ -38,34 +38,13 @@ void KeptMesh::drop() {
   bytes_ = 0;
 }
 
-void PartMeshAside::set_aside() {
-  if (aside_) return;
-  HostMesh& m = part_.mesh;
-  try {
-    file_.write(m);
-  } catch (const std::runtime_error& e) {  // (no room: the run goes on with the mesh in memory, as before)
-    file_.drop();
-    std::fprintf(stderr, "fdem: warning: %s; the part's mesh stays in memory\n", e.what());
-    return;
-  }
-  // its nodes, elements and interfaces go; its counts, names and sets stay (what the run may ask)
+void release_part_mesh(SubMesh& part) {
+  HostMesh& m = part.mesh;
   std::vector<double>().swap(m.X);
   for (std::vector<int>* v : {&m.elems, &m.elem_region, &m.ifaces, &m.iface_elems, &m.node_origin, &m.outer_faces,
                               &m.iface_ids})
     std::vector<int>().swap(*v);
-  aside_ = true;
   release_free_heap();
-}
-
-void PartMeshAside::take_back() {
-  if (!aside_) return;
-  part_.mesh = file_.read();  // (the file's counts, names and sets are the ones kept)
-  aside_ = false;
-}
-
-void PartMeshAside::forget() {
-  file_.drop();
-  aside_ = false;
 }
 
 }  // namespace fdem

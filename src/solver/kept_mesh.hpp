@@ -1,8 +1,8 @@
 #pragma once
 // A host mesh kept in a temporary file instead of in memory beside the model, for the moments a
 // run over processes reads it again: process 0's whole mesh between the cuts of the parts anew
-// (solver/run_processes.cpp), and each process's part's mesh between its set-up and the next time
-// it is read (PartMeshAside). The file is in TMPDIR (else /tmp) and unlinked at once, so it is
+// (solver/run_processes.cpp); and a part's mesh let go once its run loop has read it
+// (release_part_mesh): what a run over processes holds of its host meshes. The file is in TMPDIR (else /tmp) and unlinked at once, so it is
 // gone when the process ends, however it ends; the mesh goes to it field by field (no second copy
 // in memory: write_mesh_file, parallel/decompose.hpp).
 #include <cstdio>
@@ -35,27 +35,13 @@ class KeptMesh {
   long bytes_ = 0;
 };
 
-// This process's part's host mesh (SubMesh::mesh) set aside in a KeptMesh between the set-up of
-// its run loop, which builds the model from it, and the next time it is read: the snapshots'
-// first frame of a run whose whole mesh no process holds (its /mesh) and the first cut of the
-// parts anew (which gathers the whole mesh from the parts). About 165 B per own tetrahedron that
-// the run does not hold meanwhile at 1e7 (docs/parallel.md, "The part's mesh set aside"). While it
-// is aside the part's mesh holds its counts, names and sets only (no nodes, elements or interfaces).
-class PartMeshAside {
- public:
-  explicit PartMeshAside(SubMesh& part) : part_(part), file_("for the part's mesh until it is read again") {}
-  bool aside() const { return aside_; }
-  // (its pages given back to the kernel; where the file cannot be written, a warning and the mesh
-  // stays in memory)
-  void set_aside();
-  void take_back();  // (nothing when it is not aside)
-  // The part was replaced by another (a cut's, a set-up's): nothing of the old one is taken back.
-  void forget();
-
- private:
-  SubMesh& part_;
-  KeptMesh file_;
-  bool aside_ = false;
-};
+// This process's part's host mesh (SubMesh::mesh) let go once its run loop has built the model
+// from it and, in a run whose whole mesh no process holds, the snapshots' first frame has written
+// /mesh from it: nothing reads it again (the first cut of the parts anew rebuilds the whole mesh on
+// process 0 from the coarse one: solver/run_processes.cpp). About 165 B per own tetrahedron that
+// the run does not hold (docs/parallel.md, "The part's mesh let go"). Its nodes, elements and
+// interfaces go (its counts read 0), its names, sets and own counts stay; the freed pages go
+// back to the kernel.
+void release_part_mesh(SubMesh& part);
 
 }  // namespace fdem

@@ -71,7 +71,7 @@ HostMesh prepare_mesh(const Case& c, HostMesh* coarse) { return finish_mesh(c, p
 
 // prepare_mesh after prepare_coarse: the refinement, the transforms, the checks, the renumbering,
 // the interfaces and the region sets.
-HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse) {
+HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse, bool warn) {
   using setup_times::Phase;
   const bool refined = c.mesh.refine > 0;
   if (refined) {
@@ -90,7 +90,8 @@ HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse) {
   const BodyCheck bodies = check_bodies(mesh, source);  // duplicate nodes, overlapping bodies
   mesh.warnings = bodies.warnings;
   mesh.bodies = bodies.bodies;
-  for (const auto& w : mesh.warnings) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+  for (const auto& w : mesh.warnings)
+    if (warn) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
   checks.stop();
   Phase reorder("renumbering");
   reorder_for_locality(mesh, !refined);  // a refined mesh's elements keep their order (above)
@@ -104,7 +105,7 @@ HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse) {
     insert_interfaces(mesh, frac, cut);
   }
   for (std::string& w : unused_material_rules(c, mesh)) {  // (the whole mesh's interfaces)
-    std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
+    if (warn) std::fprintf(stderr, "fdem: warning: %s\n", w.c_str());
     mesh.warnings.push_back(std::move(w));
   }
   add_region_node_sets(mesh, region_sets_used(c));

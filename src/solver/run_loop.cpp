@@ -46,11 +46,11 @@ RunLoop<D>::RunLoop(const Case& c, std::shared_ptr<const HostMesh> mesh, const s
   if (restart) parts_->load(*restart);
   history_ = std::make_unique<HistoryTable<D>>(c, part ? part->mesh : *mesh_, sim_, history_part(part));
   // the part's mesh is read again only by the snapshots' first frame (when they write /mesh from
-  // the parts) and the first cut of the parts anew: set aside until then, before the rest of the
-  // set-up adds its arrays (take_snapshot takes it back for that frame)
-  if (part && cuts_->part_mesh && !(snaps_ && snaps_->needs_part())) {
-    setup_times::Phase aside("part_mesh_set_aside");
-    cuts_->part_mesh->set_aside();
+  // the parts): let go now, before the rest of the set-up adds its arrays, or after that frame
+  // (take_snapshot)
+  if (part && cuts_->part && !(snaps_ && snaps_->needs_part())) {
+    setup_times::Phase released("part_mesh_released");
+    release_part_mesh(*cuts_->part);
   }
   if (restart) {
     restore(*restart);
@@ -214,13 +214,12 @@ int RunLoop<D>::interrupt_signal() const {
 }
 
 // A snapshot. The first of a run whose whole mesh no process holds writes /mesh from the part's
-// mesh: taken back from where the set-up set it aside for that frame, then set aside again.
+// mesh, which is let go after it.
 template <int D>
 void RunLoop<D>::take_snapshot() {
-  PartMeshAside* aside = snaps_->needs_part() ? cuts_->part_mesh : nullptr;
-  if (aside) aside->take_back();
+  const bool first = snaps_->needs_part();
   snaps_->take(sim_, frag_.get());
-  if (aside && !snaps_->needs_part()) aside->set_aside();
+  if (first && cuts_->part && !snaps_->needs_part()) release_part_mesh(*cuts_->part);
 }
 
 template <int D>

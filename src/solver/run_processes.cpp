@@ -73,13 +73,13 @@ class ProcessesRun {
   ProcessesRun(const std::string& case_path, Case& c, const RunOptions& opt)
       : comm_(*opt.comm), root_(comm_.rank() == 0), c_(c), opt_(opt), prep_(prepare_run(case_path, c, opt)) {
     opt_.progress = opt.progress && root_;
-    cuts_.part_mesh = &part_aside_;
+    cuts_.part = &part_;
   }
   nlohmann::json run();
 
  private:
   bool local_parts();
-  void gather_for_cut();
+  void whole_mesh_for_cut();
   void first_parts();
   std::vector<int> restart_parts(const std::vector<double>& at, PartitionMethod bisection) const;
   void check_every_part_filled(const std::vector<int>& elem_part) const;
@@ -100,8 +100,7 @@ class ProcessesRun {
   PreparedRun prep_;
   double mean_size_ = std::numeric_limits<double>::infinity();  // process 0's mean element size
   std::unique_ptr<PartBuilder> parts_;  // process 0: builds every process's part as it is sent
-  SubMesh part_;                           // this process's part
-  PartMeshAside part_aside_{part_};        // its mesh, between its run loop's set-up and its next reading
+  SubMesh part_;                           // this process's part (its mesh let go by its run loop)
   // process 0, with contact: the whole mesh, to cut the parts anew (and for each run loop's set-up;
   // kept_ holds it during the run), and the contact zones' reach
   std::shared_ptr<const HostMesh> whole_;
@@ -132,7 +131,7 @@ nlohmann::json ProcessesRun::run() {
     // their new owners.
     const auto cut0 = std::chrono::steady_clock::now();
     record_cut(end.cut);
-    gather_for_cut();
+    whole_mesh_for_cut();
     if (root_) cut_anew();
     send_cut();
     cuts_.cut_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cut0).count();
@@ -141,8 +140,8 @@ nlohmann::json ProcessesRun::run() {
 
 // Whether the parts are built locally (process 0 decided in prepare_run: PreparedRun::local), and
 // if so every process's part built (local_setup) and the defaults resolved. No process holds the
-// whole mesh: its hash and report are summed over the processes, and process 0 gathers it only at
-// the first cut of the parts anew (gather_for_cut).
+// whole mesh: its hash and report are summed over the processes, and process 0 builds it only at
+// the first cut of the parts anew (whole_mesh_for_cut), from the coarse mesh it keeps until then.
 bool ProcessesRun::local_parts() {
   std::vector<char> flag(1, prep_.local ? 1 : 0);
   comm_.broadcast_bytes(flag);
@@ -151,10 +150,9 @@ bool ProcessesRun::local_parts() {
                                  : partition_has_zoltan() ? PartitionMethod::ZoltanRcb
                                                           : PartitionMethod::Rcb;
   LocalSetup ls = local_setup(c_, comm_, prep_.coarse, method, region_sets_used(c_));
-  part_aside_.forget();
   part_ = std::move(ls.part);
   mean_size_ = ls.mean_size;
-  prep_.coarse = HostMesh{};
+  if (ls.reach <= 0) prep_.coarse = HostMesh{};  // (no contact, no cut: process 0's only)
   prep_.id.mesh_hash = ls.mesh_hash;
   cuts_.mesh_report = std::move(ls.mesh_report);
   cuts_.mesh_by_parts = true;
@@ -162,19 +160,28 @@ bool ProcessesRun::local_parts() {
   if (!root_) return true;
   write_file_atomic(prep_.out + "/case.json", c_.resolved.dump(2) + "\n");
   elem_part_at_start_ = std::move(ls.elem_part);
-  whole_reach_ = ls.reach;  // (a cut gathers the whole mesh: gather_for_cut)
+  whole_reach_ = ls.reach;  // (a cut builds the whole mesh: whole_mesh_for_cut)
   return true;
 }
 
-// Every process at the first cut of a locally set-up run: the whole mesh gathered on process 0
-// from the parts (the run's first parts, held until now) and kept there for this cut and the next
-// ones (kept_), as the whole set-up keeps it from the start.
-void ProcessesRun::gather_for_cut() {
+// At the first cut of a locally set-up run: process 0 builds the whole mesh from the coarse one,
+// as the whole set-up does (finish_mesh; the same mesh as the parts', which their sum of hashes
+// checks), and keeps it for this cut and the next ones (kept_). The parts' meshes are gone by then
+// (release_part_mesh): rebuilding costs process 0 more time at the first cut than gathering them
+// did, and spares every process the set-up's writing of its part's mesh to a temporary file and
+// the file itself (docs/parallel.md, "The part's mesh let go").
+void ProcessesRun::whole_mesh_for_cut() {
   if (!cuts_.mesh_by_parts) return;
-  setup_times::Phase phase("whole_mesh_gathered");
-  part_aside_.take_back();
-  HostMesh whole = gather_whole_mesh(comm_, part_);
-  if (root_) kept_.write(whole);
+  setup_times::Phase phase("whole_mesh_rebuilt");
+  if (root_) {
+    setup_times::Folded one_phase;  // (finish_mesh's phases in this one)
+    HostMesh whole = finish_mesh(c_, prep_.coarse, nullptr, false);
+    if (mesh_hash(whole) != prep_.id.mesh_hash)
+      throw std::logic_error("the whole mesh rebuilt for a cut of the parts anew differs from the parts' (mesh hash " +
+                             mesh_hash(whole) + " against " + prep_.id.mesh_hash + ")");
+    prep_.coarse = HostMesh{};
+    kept_.write(whole);
+  }
   cuts_.mesh_by_parts = false;
 }
 
@@ -287,7 +294,6 @@ void ProcessesRun::receive_part() {
         return pack_submesh(parts_->part(r));
       },
       mine);
-  part_aside_.forget();
   part_ = unpack_submesh(mine);
   std::vector<std::vector<char>> lists;
   for (int r = 0; root_ && r < comm_.size(); ++r) lists.push_back(pack_lists(parts_->lists(r)));

@@ -45,9 +45,10 @@ bool over_processes(const RunOptions& opt);
 PreparedRun prepare_run(const std::string& case_path, Case& c, const RunOptions& opt);
 
 // A case's mesh as built, a refined case's coarse mesh renumbered (prepare_mesh's first phase),
-// and the rest of prepare_mesh on it.
+// and the rest of prepare_mesh on it (warn: the mesh's warnings on stderr; false where a run
+// builds the mesh again and has said them once).
 HostMesh prepare_coarse(const Case& c);
-HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse = nullptr);
+HostMesh finish_mesh(const Case& c, HostMesh mesh, HostMesh* coarse = nullptr, bool warn = true);
 // The regions named by "region.<name>" node sets in the boundary conditions, loads and monitors.
 std::vector<std::string> region_sets_used(const Case& c);
 // The hash of a mesh's coordinates and connectivity a checkpoint's header keeps: for the nodes'

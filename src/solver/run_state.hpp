@@ -13,7 +13,7 @@
 
 namespace fdem {
 
-class PartMeshAside;  // solver/kept_mesh.hpp
+struct SubMesh;  // parallel/decompose.hpp
 
 // What identifies a run for a restart (checkpoint header).
 struct RunIdentity {
@@ -88,12 +88,12 @@ struct CutHistory {
   // A run whose whole mesh no process holds (solver/local_setup.hpp): summary.json's mesh report,
   // summed over the processes (every process the same; null otherwise: the run loop takes it from
   // process 0's whole mesh); and whether process 0 still holds no whole mesh (until the first cut
-  // gathers it): the snapshots' /mesh then comes from every process's rows.
+  // rebuilds it from the coarse mesh): the snapshots' /mesh then comes from every process's rows.
   nlohmann::json mesh_report;
   bool mesh_by_parts = false;
-  // This process's part's mesh, set aside by the run loop once its set-up has read it and taken
-  // back for the snapshots' first frame (solver/kept_mesh.hpp; the run over processes owns it).
-  PartMeshAside* part_mesh = nullptr;
+  // This process's part, whose mesh the run loop lets go once its set-up and the snapshots' first
+  // frame have read it (release_part_mesh, solver/kept_mesh.hpp; the run over processes owns it).
+  SubMesh* part = nullptr;
 
   // Checkpoint (process 0's whole state): the cuts, rebalances and elements moved so far, and the
   // parts of the last cut when there was one. load takes the counts of a checkpoint that has them

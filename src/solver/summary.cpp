@@ -275,9 +275,9 @@ nlohmann::json setup_per_process(const Comm& comm, int own_elements) {
   static const std::vector<std::string> names = {
       "gmsh_meshing", "gmsh_extraction", "gmsh_process", "mesh", "refinement", "mesh_transforms",
       "mesh_checks", "renumbering", "interface_insertion", "local_parts", "local_sizes", "local_part",
-      "local_whole_facts", "whole_mesh_gathered", "decomposition",
+      "local_whole_facts", "whole_mesh_rebuilt", "decomposition",
       "parts_sent", "mesh_kept",
-      "model_elements", "model_interfaces", "contact_setup", "model_build", "part_mesh_set_aside", "heap_released",
+      "model_elements", "model_interfaces", "contact_setup", "model_build", "part_mesh_released", "heap_released",
       "output_setup", "other"};
   const nlohmann::json st = setup_times::report();
   std::vector<double> mine(names.size() + 4, 0.0);

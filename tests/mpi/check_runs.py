@@ -713,7 +713,7 @@ LOCAL_SETUP = {
 
 # Variants on 2 processes: (name, case, settings, environment of both runs). A cut of the parts
 # anew every 300 steps (the test hook: every element to the other process), where the locally set-up
-# run gathers the whole mesh on process 0 for the first time; the snapshots' /mesh gathered on
+# run builds the whole mesh on process 0 for the first time; the snapshots' /mesh gathered on
 # process 0 and written there (FDEM_GATHER_OUTPUT=1) instead of by every process's rows; a strength
 # scatter (the per-interface fields of /mesh written by rows).
 LOCAL_SETUP_VARIANTS = [
@@ -729,8 +729,8 @@ def check_local_setup(fdem):
     """Each process builds its part from the coarse mesh: the run is the one of the whole set-up
     (FDEM_WHOLE_SETUP=1: process 0 refines, inserts and cuts the whole mesh) to the bit: history.csv,
     fragments.csv and snapshots.h5 (frames and /mesh, which no process holds whole: written by every
-    process's rows, or gathered for the serial HDF5 or a cut). A jitter (drawn over the whole mesh)
-    takes the whole set-up."""
+    process's rows, or gathered for the serial HDF5; a cut rebuilds it on process 0 from the coarse
+    mesh). A jitter (drawn over the whole mesh) takes the whole set-up."""
     runs = [(name, case, sets, n, None) for name, (case, sets) in LOCAL_SETUP.items() for n in (2, 3)]
     runs += [(name, case, sets, 2, env) for name, case, sets, env in LOCAL_SETUP_VARIANTS]
     for name, case, sets, n, more in runs:
@@ -746,10 +746,10 @@ def check_local_setup(fdem):
         with open(os.path.join(out["local"], "summary.json")) as f:
             cuts = json.load(f)["processes"].get("contact_recuts", 0)
         local = setup_phases(out["local"])
-        # (a cut adds its phases: the whole mesh gathered on process 0 at the first, then decomposed)
+        # (a cut adds its phases: the whole mesh rebuilt on process 0 at the first, then decomposed)
         check("local_parts" in local and ("decomposition" in local) == (cuts > 0)
-              and ("whole_mesh_gathered" in local) == (cuts > 0) and "local_parts" not in setup_phases(out["whole"]),
-              f"{name}, {n} processes: the parts built locally, the whole mesh gathered only at a cut "
+              and ("whole_mesh_rebuilt" in local) == (cuts > 0) and "local_parts" not in setup_phases(out["whole"]),
+              f"{name}, {n} processes: the parts built locally, the whole mesh rebuilt only at a cut "
               f"({cuts} cuts; summary.json setup phases), and not with FDEM_WHOLE_SETUP=1")
         same = all(same_file(os.path.join(out["local"], f), os.path.join(out["whole"], f))
                    for f in ("history.csv", "fragments.csv"))
