@@ -615,6 +615,23 @@ TEST(MeshQuality, BoxAndDisc) {
   EXPECT_NEAR(qd.mean_size, 0.1, 0.03);
 }
 
+// mesh_sizes: mesh_quality's shortest altitude and mean edge, the same bits, in 2D and 3D (the box
+// with its interfaces inserted: every element its own nodes).
+TEST(MeshQuality, SizesAloneAreTheQualitysBits) {
+  HostMesh b = fdem::generate_box({0, 0, 0}, {2, 1, 1}, 3, 2, 2);
+  for (std::size_t i = 0; i < b.X.size(); ++i) b.X[i] += 0.01 * std::sin(1.7 * static_cast<double>(i));
+  fdem::insert_interfaces(b, all_fracturable(b));
+  const HostMesh d = fdem::generate_disc(0, 0, 1.0, 0.1);
+  for (const HostMesh* m : {static_cast<const HostMesh*>(&b), &d}) {
+    const auto q = fdem::mesh_quality(*m);
+    const auto s = fdem::mesh_sizes(*m);
+    EXPECT_EQ(s.min_size, q.min_size);
+    EXPECT_EQ(s.mean_size, q.mean_size);
+    EXPECT_GT(s.min_size, 0.0);
+  }
+  EXPECT_EQ(fdem::mesh_sizes(HostMesh{}).mean_size, 0.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 TEST(MeshGenerators, DiscAreaSetsDeterminism) {

@@ -93,7 +93,7 @@ void resolve_with(Case& c, const MeanSize& mean_size) {
 }  // namespace
 
 void resolve_defaults(Case& c, const HostMesh& mesh) {
-  resolve_with(c, [&] { return mesh_quality(mesh).mean_size; });
+  resolve_with(c, [&] { return mesh_sizes(mesh).mean_size; });
 }
 
 void resolve_defaults(Case& c, double mean_element_size) {

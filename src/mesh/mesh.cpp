@@ -182,12 +182,9 @@ double triangle_angles(const HostMesh& mesh, const int* n, double meas, double l
   return hmin;
 }
 
-// Tetrahedron with nodes n and signed volume `meas`: lowers min_angle_deg by its dihedral angles
-// and returns its shortest altitude (3 V / largest face area).
-double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, double pi,
-                          double& min_angle_deg) {
-  // outward face normals (area-weighted) from the local face table
-  std::array<std::array<double, 3>, 4> nf;
+// Tetrahedron with nodes n: its faces' outward normals (area-weighted, from the local face table)
+// into nf, and its largest face area.
+double tetrahedron_faces(const HostMesh& mesh, const int* n, std::array<std::array<double, 3>, 4>& nf) {
   double amax = 0;
   for (int f = 0; f < 4; ++f) {
     const double* x0 = &mesh.X[3 * static_cast<std::size_t>(n[kFaces3[f][0]])];
@@ -198,8 +195,17 @@ double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, doubl
     nf[f] = cross(u, v);
     amax = std::max(amax, 0.5 * norm(nf[f]));
   }
+  return amax;
+}
+
+// Tetrahedron with nodes n and signed volume `meas`: lowers min_angle_deg by its dihedral angles
+// (unless angles is false) and returns its shortest altitude (3 V / largest face area).
+double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, double pi, double& min_angle_deg,
+                          bool angles = true) {
+  std::array<std::array<double, 3>, 4> nf;
+  const double amax = tetrahedron_faces(mesh, n, nf);
   const double hmin = amax > 0 ? 3.0 * std::abs(meas) / amax : 0.0;
-  for (int f = 0; f < 4; ++f)
+  for (int f = 0; f < 4 && angles; ++f)
     for (int g = f + 1; g < 4; ++g) {
       const double nn = norm(nf[f]) * norm(nf[g]);
       double c = nn > 0 ? (nf[f][0] * nf[g][0] + nf[f][1] * nf[g][1] + nf[f][2] * nf[g][2]) / nn : 1.0;
@@ -208,6 +214,26 @@ double tetrahedron_angles(const HostMesh& mesh, const int* n, double meas, doubl
       min_angle_deg = std::min(min_angle_deg, dihedral * 180.0 / pi);
     }
   return hmin;
+}
+
+// An element's edges summed into edge_sum (and counted) and its shortest altitude; its angles
+// lower min_angle_deg where `angles`.
+double element_sizes(const HostMesh& mesh, int e, double pi, bool angles, double& edge_sum, std::size_t& edge_count,
+                     double& min_angle_deg, double& meas, double& lmax) {
+  const int dim = mesh.dim, npe = dim + 1;
+  const int* n = &mesh.elems[static_cast<std::size_t>(e) * npe];
+  meas = signed_measure(mesh, e);
+  lmax = 0;
+  for (int a = 0; a < npe; ++a)
+    for (int b = a + 1; b < npe; ++b) {
+      const double l = dist(&mesh.X[static_cast<std::size_t>(n[a]) * dim], &mesh.X[static_cast<std::size_t>(n[b]) * dim], dim);
+      lmax = std::max(lmax, l);
+      edge_sum += l;
+      ++edge_count;
+    }
+  if (dim == 3) return tetrahedron_angles(mesh, n, meas, pi, min_angle_deg, angles);
+  if (angles) return triangle_angles(mesh, n, meas, lmax, pi, min_angle_deg);
+  return 2.0 * std::abs(meas) / lmax;  // (triangle_angles' altitude)
 }
 
 }  // namespace
@@ -226,22 +252,10 @@ MeshQuality mesh_quality(const HostMesh& mesh, int elems) {
   q.min_measure = std::numeric_limits<double>::infinity();
   double edge_sum = 0;
   std::size_t edge_count = 0;
-  const int npe = dim + 1;
   for (int e = 0; e < ne; ++e) {
-    const int* n = &mesh.elems[static_cast<std::size_t>(e) * npe];
-    const double meas = signed_measure(mesh, e);
+    double meas = 0, lmax = 0;
+    const double hmin = element_sizes(mesh, e, pi, true, edge_sum, edge_count, q.min_angle_deg, meas, lmax);
     q.min_measure = std::min(q.min_measure, meas);
-    double lmax = 0;
-    for (int a = 0; a < npe; ++a)
-      for (int b = a + 1; b < npe; ++b) {
-        const double l = dist(&mesh.X[static_cast<std::size_t>(n[a]) * dim],
-                              &mesh.X[static_cast<std::size_t>(n[b]) * dim], dim);
-        lmax = std::max(lmax, l);
-        edge_sum += l;
-        ++edge_count;
-      }
-    const double hmin = dim == 2 ? triangle_angles(mesh, n, meas, lmax, pi, q.min_angle_deg)
-                                 : tetrahedron_angles(mesh, n, meas, pi, q.min_angle_deg);
     q.min_size = std::min(q.min_size, hmin);
     q.max_aspect = std::max(q.max_aspect, hmin > 0 ? lmax / hmin
                                                    : std::numeric_limits<double>::infinity());
@@ -249,6 +263,21 @@ MeshQuality mesh_quality(const HostMesh& mesh, int elems) {
   q.mean_size = edge_count ? edge_sum / static_cast<double>(edge_count) : 0.0;
   q.edge_sum = edge_sum;
   q.edge_count = static_cast<long>(edge_count);
+  return q;
+}
+
+ElementSizes mesh_sizes(const HostMesh& mesh) {
+  ElementSizes q;
+  const int dim = mesh.dim, ne = mesh.num_elems();
+  if (ne == 0 || (dim != 2 && dim != 3)) return q;
+  q.min_size = std::numeric_limits<double>::infinity();
+  double edge_sum = 0, no_angle = 0;
+  std::size_t edge_count = 0;
+  for (int e = 0; e < ne; ++e) {
+    double meas = 0, lmax = 0;
+    q.min_size = std::min(q.min_size, element_sizes(mesh, e, 0.0, false, edge_sum, edge_count, no_angle, meas, lmax));
+  }
+  q.mean_size = edge_count ? edge_sum / static_cast<double>(edge_count) : 0.0;
   return q;
 }
 

@@ -59,7 +59,7 @@ ContactSystem<D>::ContactSystem(const Case& c, const HostMesh& mesh, Model<D>& m
 // Parameters (docs/case-format.md, "contact").
 template <int D>
 void ContactSystem<D>::set_law(const Case& c, const HostMesh& mesh) {
-  const MeshQuality mq = mesh_quality(mesh);
+  const ElementSizes mq = mesh_sizes(mesh);
   const double hmean = mq.mean_size;
   // kn, ks, friction and skin as derived by resolve_defaults (io/case.hpp) when not given
   law.kn = c.contact.kn;

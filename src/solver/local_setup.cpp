@@ -148,7 +148,7 @@ void whole_sizes(const Comm& comm, const Basis& b, const HostMesh& own, const st
     mean = mean_size_from_sums(S, static_cast<long>(b.coarse.num_elems()) * b.children, own.dim);
   }
   comm.min(&mean, 1);  // process 0's
-  min = mesh_quality(own).min_size;
+  min = mesh_sizes(own).min_size;
   comm.min(&min, 1);
 }
 

@@ -119,7 +119,7 @@ int refined_group(const Case& c) {
 }
 
 double mean_element_size(const Case& c, const HostMesh& mesh) {
-  return c.mesh.refine > 0 ? refined_mean_size(mesh, refined_group(c)) : mesh_quality(mesh).mean_size;
+  return c.mesh.refine > 0 ? refined_mean_size(mesh, refined_group(c)) : mesh_sizes(mesh).mean_size;
 }
 
 std::vector<int> refined_partition(const Case& c, const HostMesh& coarse, int parts, PartitionMethod method) {

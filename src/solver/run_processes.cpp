@@ -196,7 +196,7 @@ void ProcessesRun::first_parts() {
                      std::to_string(comm_.size()) + " processes of this run: run it on at most " +
                      std::to_string(mesh.num_elems()) + " processes (mpirun -n), or with a finer mesh");
   setup_times::Phase phase("decomposition");
-  const MeshQuality mq = mesh_quality(mesh);
+  const ElementSizes mq = mesh_sizes(mesh);
   mean_size_ = mean_element_size(c_, mesh);  // (what prepare_run's defaults derived from)
   const double reach = contact_wanted(c_, mesh) ? contact_penetration_depth(mq.min_size, mean_size_) +
                                                       c_.contact.skin + c_.contact.zone
