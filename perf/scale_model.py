@@ -55,9 +55,10 @@ MEASURED = {
     # each process's local set-up (summary.json's local_parts with local_sizes, local_part and
     # local_whole_facts: its coarse elements refined, its neighbourhood refined with its interfaces,
     # the part cut, the whole mesh's facts summed), per own tetrahedron: the median of four runs of
-    # 10 255 360 tetrahedra on 2 processes at 3a93bbf, with huge pages (docs/parallel.md, "1e7
-    # tetrahedra on this machine": 18.1, 11.3, 10.4, 14.4 s for 5 127 680 own)
-    "local_part_s_per_own_tet": 12.85 / 5127680,
+    # 10 255 360 tetrahedra on 2 processes (2026-12-08, thirty-third session), with huge pages
+    # (docs/parallel.md, "1e7 tetrahedra on this machine": the slower process's 15.9, 11.4, 9.1,
+    # 8.9 s for 5 127 680 own)
+    "local_part_s_per_own_tet": 10.24 / 5127680,
     # process 0 building the whole mesh from the coarse one (a local set-up's first cut; 2026-12-08,
     # fdem run on 2 processes with FDEM_TEST_RECUT=20, summary.json processes.setup_phase_wall_seconds
     # `whole_mesh_rebuilt`, 0.94 s; docs/parallel.md, "The part's mesh let go"), per tetrahedron
