@@ -174,6 +174,8 @@ void ProcessesRun::whole_mesh_for_cut() {
   if (!cuts_.mesh_by_parts) return;
   setup_times::Phase phase("whole_mesh_rebuilt");
   if (root_) {
+    if (prep_.coarse.num_elems() == 0)
+      throw std::logic_error("a cut of the parts anew in a locally set-up run without contact (no coarse mesh kept)");
     setup_times::Folded one_phase;  // (finish_mesh's phases in this one)
     HostMesh whole = finish_mesh(c_, prep_.coarse, nullptr, false);
     if (mesh_hash(whole) != prep_.id.mesh_hash)
