@@ -569,7 +569,8 @@ RefinedPart refine_elements(const HostMesh& m, const CoarseTopology& t, const st
   f.elems.reserve(kids * npe);
   f.elem_region.reserve(kids);
   out.elem_gid.reserve(kids);
-  const std::size_t nodes_about = kids / (d == 2 ? 1 : 4) + 16;  // (about 1/2 and 1/5 of them)
+  // (the nodes are about 1/2 of the elements in 2D and 1/5 in 3D: room for more)
+  const std::size_t nodes_about = kids / (d == 2 ? 1 : 4) + 16;
   f.X.reserve(nodes_about * d);
   out.node_gid.reserve(nodes_about);
   // the lattice of one element: (m+1)^dim slots by (b_1, .., b_dim)

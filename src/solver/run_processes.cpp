@@ -13,6 +13,8 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "common/error.hpp"
 #include "common/setup_times.hpp"
@@ -177,11 +179,12 @@ void ProcessesRun::whole_mesh_for_cut() {
     if (prep_.coarse.num_elems() == 0)
       throw std::logic_error("a cut of the parts anew in a locally set-up run without contact (no coarse mesh kept)");
     setup_times::Folded one_phase;  // (finish_mesh's phases in this one)
-    HostMesh whole = finish_mesh(c_, prep_.coarse, nullptr, false);
-    if (mesh_hash(whole) != prep_.id.mesh_hash)
+    HostMesh whole = finish_mesh(c_, std::move(prep_.coarse), nullptr, false);
+    prep_.coarse = HostMesh{};  // (moved from: no longer needed)
+    const std::string hash = mesh_hash(whole);
+    if (hash != prep_.id.mesh_hash)
       throw std::logic_error("the whole mesh rebuilt for a cut of the parts anew differs from the parts' (mesh hash " +
-                             mesh_hash(whole) + " against " + prep_.id.mesh_hash + ")");
-    prep_.coarse = HostMesh{};
+                             hash + " against " + prep_.id.mesh_hash + ")");
     kept_.write(whole);
   }
   cuts_.mesh_by_parts = false;
